@@ -1,0 +1,190 @@
+//! Alarms: every machine-level error the engine can raise, typed, with the vendor's number where
+//! a source document gives one and a project number (`NC-xxxx`) where none does.
+//!
+//! The list of codes and texts is the contract with users' scripts: add, never renumber.
+
+/// The kind of an alarm; its code and title are fixed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum AlarmKind {
+    /// Fanuc 0010: a G code the dialect does not have.
+    ImproperGCode,
+    /// Fanuc 0011: feed rate zero (or not given) for a feed move or cycle.
+    FeedZero,
+    /// Fanuc 0200: S missing or out of range for rigid tapping.
+    IllegalSCode,
+    /// Fanuc 0201: no F in a rigid tapping cycle.
+    FeedNotFoundRigid,
+    /// Fanuc 0202: the spindle position distribution overflowed (lead × speed too high).
+    PositionLsiOverflow,
+    /// Fanuc 0203: M29 or S misplaced (M29 repeated, M29 without S, S changed in rigid mode).
+    ProgramMissRigid,
+    /// Fanuc 0204: an axis moved between M29 and the tapping cycle.
+    IllegalAxisOperation,
+    /// Fanuc 0205: RGTAP (G61.0) not on when the rigid tapping cycle runs.
+    RigidModeDiOff,
+    /// Fanuc 0206: the plane changed in rigid tapping mode.
+    CannotChangePlane,
+    /// Fanuc 0207: the tapping distance or data is inconsistent.
+    RigidDataMismatch,
+    /// Fanuc 0410: servo excess error at standstill.
+    ExcessErrorStopped,
+    /// Fanuc 0411: servo excess error while moving (tap and spindle out of sync).
+    ExcessErrorMoving,
+    /// PLC 5002: no position-mode answer after M29 within the PLC timer.
+    M29FeedbackTimeout,
+    /// PLC 5074: the spindle did not rotate during rigid tapping for longer than the timer.
+    SpindleNotRotating,
+    /// NC-1001: a word's value is outside its range.
+    WordOutOfRange,
+    /// NC-1002: a word the command needs is missing.
+    WordMissing,
+    /// NC-1003: a G code this dialect does not have (dialects without a vendor number).
+    UnsupportedGCode,
+    /// NC-1004: a feature the engine recognises but does not model (subprograms, macros...).
+    NotModelled,
+    /// NC-1005: a word given where the command does not allow it, or twice.
+    IllegalWord,
+    /// NC-1010: M29 repeated while rigid tapping mode is on.
+    M29Repeated,
+    /// NC-1011: axis move between M29 and G84/G88.
+    AxisMoveAfterM29,
+    /// NC-1012: the clamp M code of the tapping block is not the one of parameter 170.
+    ClampCodeMismatch,
+    /// NC-1013: tapping direction changed (G84 ↔ G88) without a new hole bottom.
+    TapAxisChangedWithoutBottom,
+    /// NC-1014: M29 and another M code in the same block.
+    M29SharesBlock,
+    /// NC-1015: RGTAP not on when the GSK rigid tapping cycle starts.
+    RigidSignalOff,
+    /// NC-1016: more than one M code in a block where the dialect allows one.
+    TooManyMCodes,
+    /// NC-1017: the spindle is not turning when a tapping cycle needs it.
+    SpindleNotTurning,
+    /// NC-1020: an M/S/T function's FIN never came within the PLC timer.
+    FinTimeout,
+    /// NC-1030: emergency stop.
+    EmergencyStop,
+    /// NC-1031: motor current overload during tapping: the tap was retracted.
+    OverloadRetract,
+    /// NC-1040: a machine parameter is out of its range (parameter change at run time).
+    ParameterOutOfRange,
+}
+
+impl AlarmKind {
+    /// The alarm number as the trace writes it.
+    pub fn code(self) -> &'static str {
+        use AlarmKind::*;
+        match self {
+            ImproperGCode => "0010",
+            FeedZero => "0011",
+            IllegalSCode => "0200",
+            FeedNotFoundRigid => "0201",
+            PositionLsiOverflow => "0202",
+            ProgramMissRigid => "0203",
+            IllegalAxisOperation => "0204",
+            RigidModeDiOff => "0205",
+            CannotChangePlane => "0206",
+            RigidDataMismatch => "0207",
+            ExcessErrorStopped => "0410",
+            ExcessErrorMoving => "0411",
+            M29FeedbackTimeout => "5002",
+            SpindleNotRotating => "5074",
+            WordOutOfRange => "NC-1001",
+            WordMissing => "NC-1002",
+            UnsupportedGCode => "NC-1003",
+            NotModelled => "NC-1004",
+            IllegalWord => "NC-1005",
+            M29Repeated => "NC-1010",
+            AxisMoveAfterM29 => "NC-1011",
+            ClampCodeMismatch => "NC-1012",
+            TapAxisChangedWithoutBottom => "NC-1013",
+            M29SharesBlock => "NC-1014",
+            RigidSignalOff => "NC-1015",
+            TooManyMCodes => "NC-1016",
+            SpindleNotTurning => "NC-1017",
+            FinTimeout => "NC-1020",
+            EmergencyStop => "NC-1030",
+            OverloadRetract => "NC-1031",
+            ParameterOutOfRange => "NC-1040",
+        }
+    }
+
+    /// The alarm's fixed title (the vendor's text where there is one).
+    pub fn title(self) -> &'static str {
+        use AlarmKind::*;
+        match self {
+            ImproperGCode => "IMPROPER G-CODE",
+            FeedZero => "FEED ZERO",
+            IllegalSCode => "ILLEGAL S CODE COMMAND",
+            FeedNotFoundRigid => "FEEDRATE NOT FOUND IN RIGID TAP",
+            PositionLsiOverflow => "POSITION LSI OVERFLOW",
+            ProgramMissRigid => "PROGRAM MISS AT RIGID TAPPING",
+            IllegalAxisOperation => "ILLEGAL AXIS OPERATION",
+            RigidModeDiOff => "RIGID MODE DI SIGNAL OFF",
+            CannotChangePlane => "CAN NOT CHANGE PLANE (RIGID TAP)",
+            RigidDataMismatch => "RIGID DATA MISMATCH",
+            ExcessErrorStopped => "EXCESS ERROR (STOP)",
+            ExcessErrorMoving => "EXCESS ERROR (MOVE)",
+            M29FeedbackTimeout => "FEEDBACK SIGNAL TIMEOUT AFTER M29",
+            SpindleNotRotating => "SPINDLE NOT ROTATING IN RIGID TAPPING",
+            WordOutOfRange => "WORD OUT OF RANGE",
+            WordMissing => "WORD MISSING",
+            UnsupportedGCode => "UNSUPPORTED G CODE",
+            NotModelled => "NOT MODELLED",
+            IllegalWord => "ILLEGAL WORD",
+            M29Repeated => "M29 REPEATED IN RIGID TAPPING",
+            AxisMoveAfterM29 => "AXIS MOVE BETWEEN M29 AND TAPPING CYCLE",
+            ClampCodeMismatch => "CLAMP M CODE MISMATCH",
+            TapAxisChangedWithoutBottom => "TAP AXIS CHANGED WITHOUT NEW BOTTOM",
+            M29SharesBlock => "M29 SHARES BLOCK WITH ANOTHER M CODE",
+            RigidSignalOff => "RIGID TAPPING SIGNAL RGTAP OFF",
+            TooManyMCodes => "TOO MANY M CODES IN BLOCK",
+            SpindleNotTurning => "SPINDLE NOT TURNING",
+            FinTimeout => "FIN TIMEOUT",
+            EmergencyStop => "EMERGENCY STOP",
+            OverloadRetract => "OVERLOAD RETRACT",
+            ParameterOutOfRange => "PARAMETER OUT OF RANGE",
+        }
+    }
+}
+
+/// One raised alarm: kind, the particulars, and where in the program.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Alarm {
+    /// What kind.
+    pub kind: AlarmKind,
+    /// The particulars ("P-1: dwell must be 0..99999999 ms").
+    pub detail: String,
+    /// Source line of the block that raised it, if any.
+    pub line: Option<u32>,
+    /// Column of the offending word, if any.
+    pub col: Option<u32>,
+}
+
+impl Alarm {
+    /// A new alarm without a location.
+    pub fn new(kind: AlarmKind, detail: impl Into<String>) -> Self {
+        Alarm { kind, detail: detail.into(), line: None, col: None }
+    }
+
+    /// Sets the location.
+    pub fn at(mut self, line: u32, col: Option<u32>) -> Self {
+        self.line = Some(line);
+        self.col = col;
+        self
+    }
+
+    /// The full message: title, particulars and location.
+    pub fn message(&self) -> String {
+        let loc = match (self.line, self.col) {
+            (Some(l), Some(c)) => format!(" (line {l}, column {c})"),
+            (Some(l), None) => format!(" (line {l})"),
+            _ => String::new(),
+        };
+        if self.detail.is_empty() {
+            format!("{}{loc}", self.kind.title())
+        } else {
+            format!("{}: {}{loc}", self.kind.title(), self.detail)
+        }
+    }
+}

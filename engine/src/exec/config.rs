@@ -1,0 +1,63 @@
+//! The plant model's settings, derived by each dialect from its parameters.
+
+use crate::trace::AXES;
+use crate::units::{Micros, Nm};
+
+/// PLC ladder timing (the project's model of a standard ladder; `plc.*` parameters).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlcConfig {
+    /// Strobe (MF/SF/TF) to FIN.
+    pub fin_us: Micros,
+    /// MF falling to FIN falling.
+    pub fin_fall_us: Micros,
+    /// M29 strobe to the position-mode request to the drive.
+    pub sppos_request_us: Micros,
+    /// Position-mode request to the drive's "reached" answer.
+    pub sppos_reach_us: Micros,
+    /// "Reached" to RGTAP and FIN.
+    pub rgtap_us: Micros,
+    /// F76.3 falling to RGTAP falling (and the position-mode request dropping).
+    pub rgtap_fall_us: Micros,
+    /// PLC timer for the position-mode answer after M29 (alarm 5002).
+    pub m29_timeout_us: Micros,
+    /// PLC timer for FIN of any function (alarm NC-1020).
+    pub fin_timeout_us: Micros,
+    /// PLC timer for a spindle that does not rotate while it should in rigid tapping (alarm 5074).
+    pub spindle_stall_us: Micros,
+}
+
+/// Everything the executor needs to know about the machine.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlantConfig {
+    /// Interpolation period, µs (1, 2, 4 or 8 ms).
+    pub period_us: Micros,
+    /// Rapid traverse rate per axis, nm/min.
+    pub rapid_nm_min: [f64; AXES],
+    /// Rapid acceleration time constant per axis (time to reach the rapid rate), µs.
+    pub rapid_ramp_us: [Micros; AXES],
+    /// Upper limit of the cutting feed, nm/min.
+    pub feed_max_nm_min: f64,
+    /// Cutting feed acceleration time constant (time to reach `feed_max_nm_min`), µs.
+    pub feed_ramp_us: Micros,
+    /// Dry run feed rate, nm/min.
+    pub dry_run_nm_min: f64,
+    /// Backlash per axis, nm (applied on each reversal of the axis).
+    pub backlash_nm: [Nm; AXES],
+    /// Maximum spindle speed, rpm.
+    pub spindle_max_rpm: u32,
+    /// Spindle acceleration time constant (0 → maximum speed), µs.
+    pub spindle_ramp_us: Micros,
+    /// Maximum spindle speed in rigid tapping, rpm.
+    pub rigid_max_rpm: u32,
+    /// Rigid tapping time constant at `rigid_max_rpm` (scaled by S / max: constant acceleration), µs.
+    pub rigid_ramp_us: Micros,
+    /// Feed hold and single block act during rigid tapping (Fanuc 5200#6 FHD); false: they wait
+    /// until the return is complete.
+    pub hold_in_rigid_tap: bool,
+    /// Spindle orientation (reference return) time, µs.
+    pub orient_us: Micros,
+    /// Servo excess error limit for the tap axis while moving, nm (alarm 0411).
+    pub excess_error_nm: Nm,
+    /// The PLC ladder.
+    pub plc: PlcConfig,
+}

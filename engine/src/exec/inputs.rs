@@ -1,0 +1,233 @@
+//! Operator inputs, faults and PLC answers acting on a run, and the overload retract.
+
+use super::{Active, Exec};
+use crate::alarm::{Alarm, AlarmKind};
+use crate::input::{CurrentSource, Input};
+use crate::plan::{OverloadWatch, Step, TapMove};
+use crate::trace::{EndReason, Event, Phase, Signal};
+use crate::units::Micros;
+
+use super::motion::Path;
+use super::plc::PlcAction;
+
+impl Exec<'_> {
+    /// A PLC or drive action falls due.
+    pub(super) fn plc_edge(&mut self, action: PlcAction) {
+        match action {
+            PlcAction::Set(sig, v) => {
+                self.set_signal(sig, v);
+                let rtap = self.signals.get(Signal::Rtap);
+                self.plc.react(self.now, sig, v, rtap);
+                self.check_await();
+            }
+            PlcAction::M29Timer(n) => {
+                if n == self.plc.strobe_no
+                    && self.signals.get(Signal::Rtap)
+                    && !self.signals.get(Signal::Spposa)
+                {
+                    self.raise(Alarm::new(
+                        AlarmKind::M29FeedbackTimeout,
+                        "the spindle drive did not report position mode after M29",
+                    ));
+                }
+            }
+            PlcAction::FinTimer(n) => {
+                let strobing = [Signal::Mf, Signal::Sf, Signal::Tf].iter().any(|&s| self.signals.get(s));
+                if n == self.plc.strobe_no && strobing && !self.signals.get(Signal::Fin) {
+                    self.raise(Alarm::new(AlarmKind::FinTimeout, "the PLC did not answer FIN"));
+                }
+            }
+            PlcAction::StallTimer => {
+                if self.spindle.stalled
+                    && self.motion.as_ref().is_some_and(|m| matches!(m.path, Path::Tap { .. }))
+                {
+                    self.raise(Alarm::new(
+                        AlarmKind::SpindleNotRotating,
+                        "the spindle does not rotate during rigid tapping",
+                    ));
+                }
+            }
+        }
+    }
+
+    /// An operator input or fault takes effect now.
+    pub(super) fn apply_input(&mut self, input: Input) {
+        self.emit(Event::Input { name: input.name().to_string(), value: input.value_text() });
+        match input {
+            Input::CycleStart => {
+                if self.active == Active::Held {
+                    self.set_signal(Signal::Spl, false);
+                    self.set_signal(Signal::Stl, true);
+                    self.active = Active::Idle;
+                }
+            }
+            Input::FeedHold => {
+                if self.hold_suppressed && !self.cfg.hold_in_rigid_tap {
+                    self.hold_pending = true;
+                } else {
+                    self.feed_hold_now();
+                }
+            }
+            Input::Reset => self.reset(),
+            Input::SingleBlock(b) => self.single_block = b,
+            Input::DryRun(b) => self.dry_run = b,
+            Input::MachineLock(b) => self.machine_lock = b,
+            Input::OptionalStop(b) => self.optional_stop = b,
+            Input::FeedOverride(p) => self.feed_override = p.min(200),
+            Input::SpindleOverride(p) => self.spindle_override = p.min(200),
+            Input::EmergencyStop(true) => {
+                self.set_signal(Signal::Esp, true);
+                self.stop_motion_now();
+                self.raise(Alarm::new(AlarmKind::EmergencyStop, "emergency stop pressed"));
+            }
+            Input::EmergencyStop(false) => self.set_signal(Signal::Esp, false),
+            Input::MotorCurrent { source, percent } => {
+                self.current_pct[source_slot(source)] = percent;
+                if let Some(w) = self.overload {
+                    self.overload_check(w);
+                }
+            }
+            Input::PlcAnswer { answer, extra_us } => self.plc.set_fault(answer, extra_us),
+            Input::SpindleStall(b) => {
+                let (a, _) = self.spindle.at(self.now);
+                let target = self.spindle.target;
+                self.spindle.hold(self.now, a);
+                self.spindle.stalled = b;
+                if !b {
+                    self.spindle.command(self.now, target);
+                }
+            }
+            Input::SetParam { .. } => {}
+        }
+    }
+
+    /// Feed hold outside rigid tapping: a motion decelerates to a stop, then the control waits
+    /// for cycle start and carries on with the rest of the move.
+    fn feed_hold_now(&mut self) {
+        if let Some(m) = &self.motion {
+            let target = m.target;
+            let remaining = match &m.path {
+                Path::Rapid { .. } => Some(Step::Rapid { target }),
+                _ => None,
+            };
+            self.stop_motion_now();
+            if let Some(s) = remaining {
+                self.steps.push_front(s);
+            }
+        }
+        self.hold_force();
+    }
+
+    fn hold_force(&mut self) {
+        self.set_signal(Signal::Stl, false);
+        self.set_signal(Signal::Spl, true);
+        if matches!(self.active, Active::Moving | Active::Idle) {
+            self.active = Active::Held;
+        }
+    }
+
+    /// Stops the present motion where it is (decelerating within the interpolation period).
+    fn stop_motion_now(&mut self) {
+        if let Some(m) = &mut self.motion {
+            m.stop_at(self.now, f64::INFINITY, self.cfg.period_us);
+        }
+        self.end_motion();
+        if self.active == Active::Moving {
+            self.active = Active::Idle;
+        }
+    }
+
+    /// CNC reset: motion stops, rigid tapping is cancelled, the spindle returns to its state
+    /// before M29, the program ends.
+    fn reset(&mut self) {
+        self.stop_motion_now();
+        self.plc.clear();
+        self.steps.clear();
+        if self.signals.get(Signal::Rtap) || self.signals.get(Signal::Rgtap) {
+            self.set_signal(Signal::Rtap, false);
+            self.plc.rigid_exit(self.now);
+        }
+        for s in [Signal::Mf, Signal::Sf, Signal::Tf, Signal::Rgspp, Signal::Rgspm] {
+            self.set_signal(s, false);
+        }
+        if let Some(rpm) = self.pre_rigid_rpm.take() {
+            self.spindle.position_mode = false;
+            self.spindle.command(self.now, rpm);
+        }
+        self.hold_suppressed = false;
+        self.overload = None;
+        self.interp.reset(self.cmd);
+        self.set_phase(Phase::Idle);
+        // Let the ladder finish dropping RGTAP, then end.
+        self.flush_plc_after_reset();
+        self.finish(EndReason::Reset);
+    }
+
+    fn flush_plc_after_reset(&mut self) {
+        while let Some(t) = self.plc.next_time() {
+            self.advance_to(t);
+            if let Some(PlcAction::Set(sig, v)) = self.plc.pop_due(t) {
+                {
+                    self.set_signal(sig, v);
+                    let rtap = self.signals.get(Signal::Rtap);
+                    self.plc.react(self.now, sig, v, rtap);
+                }
+            }
+        }
+    }
+
+    /// Starts or stops the overload timer after a change of current or watch.
+    pub(super) fn overload_check(&mut self, w: OverloadWatch) {
+        let over = self.current_pct[source_slot(w.source)] > w.threshold_pct;
+        match (over, self.over_since) {
+            (true, None) => self.over_since = Some(self.now),
+            (false, Some(_)) => self.over_since = None,
+            _ => {}
+        }
+    }
+
+    /// When the overload retract will trip if nothing changes.
+    pub(super) fn overload_expiry(&self) -> Option<Micros> {
+        let w = self.overload?;
+        Some(self.over_since? + w.delay_us)
+    }
+
+    /// The current stayed above the threshold for the delay: stop, retract to the start point.
+    pub(super) fn overload_trip(&mut self) {
+        let Some(w) = self.overload.take() else { return };
+        self.over_since = None;
+        let tap = self.motion.as_ref().and_then(|m| match m.path {
+            Path::Tap { axis, lead, spin, .. } => Some((axis, lead, spin)),
+            _ => None,
+        });
+        self.emit(Event::Input { name: "overload_trip".into(), value: format!("{}%", w.threshold_pct) });
+        let Some((axis, lead, spin)) = tap else { return };
+        if let Some(m) = &mut self.motion {
+            let a = m.speed(self.now) / (self.cfg.rigid_ramp_us.max(1) as f64);
+            m.stop_at(self.now, a.max(1e-9), self.cfg.period_us);
+        }
+        self.steps.clear();
+        self.steps.push_back(Step::Phase(Phase::OverloadRetract));
+        self.steps.push_back(Step::Tap(TapMove {
+            axis,
+            target: w.return_to,
+            lead_nm: lead as i64,
+            rpm: self.s_cmd.max(1),
+            spindle_forward: spin < 0.0,
+            override_pct: 100,
+            cutting: false,
+        }));
+        self.steps.push_back(Step::HoldSuppress(false));
+        self.steps.push_back(Step::Alarm(Alarm::new(
+            AlarmKind::OverloadRetract,
+            format!("motor current above {}% for {} ms: tap retracted", w.threshold_pct, w.delay_us / 1000),
+        )));
+    }
+}
+
+fn source_slot(s: CurrentSource) -> usize {
+    match s {
+        CurrentSource::FeedAxis => 0,
+        CurrentSource::Spindle => 1,
+    }
+}

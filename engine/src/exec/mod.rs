@@ -1,0 +1,375 @@
+//! Execute: advances time from event to event over the plant model, carrying out the planned
+//! steps and applying inputs and faults at their exact times.
+//!
+//! The executor's cost grows with the number of events, not with simulated time: motions are
+//! closed-form profiles evaluated only where something is observed (a sample, an input, the end
+//! of a step). The CNC acts on interpolation-period ticks; the PLC and drive ([`plc`]) answer
+//! after their own delays.
+
+pub mod config;
+mod inputs;
+pub mod motion;
+mod plc;
+pub mod profile;
+pub mod spindle;
+mod steps;
+
+pub use config::{PlantConfig, PlcConfig};
+
+use std::collections::VecDeque;
+
+use crate::alarm::Alarm;
+use crate::dialect::Interpreter;
+use crate::input::Input;
+use crate::parse::Program;
+use crate::plan::{OverloadWatch, Pos, Step};
+use crate::trace::{
+    EndReason, EndSummary, Event, Phase, Sample, Signal, Signals, TraceEvent, TraceMeta, TraceSink, AXES,
+};
+use crate::units::{ceil_to, Micros};
+use crate::{Machine, RunOptions};
+use motion::Motion;
+use plc::Plc;
+use spindle::Spindle;
+
+/// What the CNC is busy with.
+#[derive(Debug, Clone, PartialEq)]
+enum Active {
+    /// Ready for the next step.
+    Idle,
+    /// A motion (the `Motion` is in `Exec::motion`).
+    Moving,
+    /// Until a time (dwell, or the tick at which an awaited signal was seen).
+    Until(Micros),
+    /// Until a signal has a value; then the step's follow-up.
+    Await { signal: Signal, value: bool, then: AfterAwait },
+    /// Stopped until cycle start (feed hold, single block, M00).
+    Held,
+}
+
+/// What to do once an awaited signal arrives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum AfterAwait {
+    /// Drop the strobe, the function is complete.
+    EndStrobe(Signal),
+    /// Nothing more.
+    Nothing,
+}
+
+/// The whole state of one run.
+pub(crate) struct Exec<'a> {
+    cfg: PlantConfig,
+    opts: &'a RunOptions,
+    sink: &'a mut dyn TraceSink,
+    interp: Box<dyn Interpreter>,
+    program: &'a Program,
+    diameter_x: bool,
+    now: Micros,
+    next_sample: Micros,
+    pc: usize,
+    steps: VecDeque<Step>,
+    active: Active,
+    motion: Option<Motion>,
+    /// Command positions when no motion is running.
+    cmd: Pos,
+    /// Command minus machine position (grows under machine lock).
+    lock_offset: Pos,
+    /// Last direction of motion per axis (for backlash), −1, 0, +1.
+    last_dir: [i8; AXES],
+    spindle: Spindle,
+    /// Spindle state before M29 (speed, signed rpm) to restore at reset.
+    pre_rigid_rpm: Option<f64>,
+    /// Commanded speed, rpm.
+    s_cmd: u32,
+    signals: Signals,
+    plc: Plc,
+    inputs: Vec<(Micros, Input)>,
+    next_input: usize,
+    phase: Phase,
+    hold_suppressed: bool,
+    hold_pending: bool,
+    single_block: bool,
+    dry_run: bool,
+    machine_lock: bool,
+    optional_stop: bool,
+    feed_override: u32,
+    spindle_override: u32,
+    overload: Option<OverloadWatch>,
+    current_pct: [u32; 2],
+    over_since: Option<Micros>,
+    alarms: u32,
+    blocks: u32,
+    finished: Option<EndReason>,
+    /// The block's steps are done and single block asks for a stop.
+    block_done: bool,
+}
+
+/// Runs `program` on `machine`, streaming the trace into `sink`.
+pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut dyn TraceSink) {
+    let cfg = machine.dialect.plant_config(&machine.params);
+    let meta = TraceMeta {
+        dialect: machine.dialect.name(),
+        axes: machine.dialect.axes().to_vec(),
+        period_us: cfg.period_us,
+        sample_us: opts.sample_us,
+    };
+    sink.start(&meta);
+    let accel = cfg.spindle_max_rpm as f64 / (cfg.spindle_ramp_us.max(1)) as f64;
+    let diameter_x = meta.axes.iter().any(|a| a.diameter);
+    let mut ex = Exec {
+        interp: machine.dialect.interpreter(&machine.params),
+        plc: Plc::new(cfg.plc),
+        cfg,
+        opts,
+        sink,
+        program,
+        diameter_x,
+        now: 0,
+        next_sample: 0,
+        pc: 0,
+        steps: VecDeque::new(),
+        active: Active::Idle,
+        motion: None,
+        cmd: [0; AXES],
+        lock_offset: [0; AXES],
+        last_dir: [0; AXES],
+        spindle: Spindle::new(if accel > 0.0 { accel } else { f64::INFINITY }),
+        pre_rigid_rpm: None,
+        s_cmd: 0,
+        signals: Signals::default(),
+        inputs: opts.inputs.timed(),
+        next_input: 0,
+        phase: Phase::Idle,
+        hold_suppressed: false,
+        hold_pending: false,
+        single_block: false,
+        dry_run: false,
+        machine_lock: false,
+        optional_stop: false,
+        feed_override: 100,
+        spindle_override: 100,
+        overload: None,
+        current_pct: [0; 2],
+        over_since: None,
+        alarms: 0,
+        blocks: 0,
+        finished: None,
+        block_done: false,
+    };
+    ex.main_loop();
+}
+
+impl Exec<'_> {
+    fn main_loop(&mut self) {
+        self.set_signal(Signal::Stl, true);
+        while self.finished.is_none() {
+            if self.active == Active::Idle {
+                self.start_next();
+                continue;
+            }
+            let t = self.next_event_time();
+            if t == Micros::MAX || t > self.opts.time_limit_us {
+                let reason = if self.active == Active::Held || t == Micros::MAX {
+                    EndReason::Stopped
+                } else {
+                    EndReason::TimeLimit
+                };
+                if reason == EndReason::TimeLimit {
+                    self.advance_to(self.opts.time_limit_us);
+                }
+                self.finish(reason);
+                break;
+            }
+            self.advance_to(t);
+            self.handle_events_at(t);
+        }
+    }
+
+    /// The earliest time at which anything happens.
+    fn next_event_time(&self) -> Micros {
+        let mut t = Micros::MAX;
+        match &self.active {
+            Active::Moving => {
+                if let Some(m) = &self.motion {
+                    t = t.min(m.end());
+                }
+            }
+            Active::Until(u) => t = t.min(*u),
+            _ => {}
+        }
+        if let Some(p) = self.plc.next_time() {
+            t = t.min(p);
+        }
+        if let Some((ti, _)) = self.inputs.get(self.next_input) {
+            t = t.min((*ti).max(self.now));
+        }
+        if let Some(e) = self.overload_expiry() {
+            t = t.min(e.max(self.now));
+        }
+        t
+    }
+
+    /// Moves the clock to `t`, writing the samples on the way.
+    fn advance_to(&mut self, t: Micros) {
+        if self.opts.sample_us > 0 {
+            while self.next_sample <= t {
+                let s = self.sample_at(self.next_sample);
+                self.sink.event(&TraceEvent { t_us: self.next_sample, event: Event::Sample(s) });
+                self.next_sample += self.opts.sample_us;
+            }
+        }
+        self.now = t;
+    }
+
+    /// Everything due at `now`: PLC answers, inputs, overload, the end of the present activity.
+    fn handle_events_at(&mut self, t: Micros) {
+        while let Some(a) = self.plc.pop_due(t) {
+            self.plc_edge(a);
+            if self.finished.is_some() {
+                return;
+            }
+        }
+        while let Some((ti, input)) = self.inputs.get(self.next_input).cloned() {
+            if ti > t {
+                break;
+            }
+            self.next_input += 1;
+            self.apply_input(input);
+            if self.finished.is_some() {
+                return;
+            }
+        }
+        if let Some(e) = self.overload_expiry() {
+            if e <= t {
+                self.overload_trip();
+                if self.finished.is_some() {
+                    return;
+                }
+            }
+        }
+        match self.active.clone() {
+            Active::Moving if self.motion.as_ref().is_some_and(|m| m.end() <= t) => {
+                self.end_motion();
+                self.active = Active::Idle;
+            }
+            Active::Until(u) if u <= t => self.active = Active::Idle,
+            _ => {}
+        }
+    }
+
+    /// Checks an awaited signal after a PLC edge; the CNC notices it at its next tick.
+    fn check_await(&mut self) {
+        if let Active::Await { signal, value, then } = self.active {
+            if self.signals.get(signal) == value {
+                if let AfterAwait::EndStrobe(strobe) = then {
+                    self.set_signal(strobe, false);
+                    self.plc.strobe_dropped(self.now);
+                }
+                let tick = ceil_to(self.now, self.cfg.period_us);
+                self.active = if tick > self.now { Active::Until(tick) } else { Active::Idle };
+            }
+        }
+    }
+
+    /// Emits an event at the present time.
+    fn emit(&mut self, event: Event) {
+        self.sink.event(&TraceEvent { t_us: self.now, event });
+    }
+
+    /// Sets a signal, emitting an edge when it changes.
+    fn set_signal(&mut self, s: Signal, v: bool) {
+        if self.signals.get(s) != v {
+            self.signals.set(s, v);
+            self.emit(Event::Signal { signal: s, value: v });
+        }
+    }
+
+    fn set_phase(&mut self, p: Phase) {
+        if self.phase != p {
+            self.phase = p;
+            self.emit(Event::Phase(p));
+        }
+    }
+
+    /// Raises an alarm: the machine stops where it is and the run ends.
+    fn raise(&mut self, alarm: Alarm) {
+        self.alarms += 1;
+        self.emit(Event::Alarm(alarm));
+        if let Some(m) = &self.motion {
+            self.cmd = m.pos(self.now);
+        }
+        self.motion = None;
+        self.finish(EndReason::Alarm);
+    }
+
+    /// Machine positions (physical) at `t`.
+    fn machine_pos(&self, t: Micros) -> Pos {
+        let cmd = self.command_pos(t);
+        let mut p = [0; AXES];
+        for i in 0..AXES {
+            p[i] = cmd[i] - self.lock_offset[i];
+        }
+        if self.machine_lock {
+            if let Some(m) = &self.motion {
+                for i in 0..AXES {
+                    p[i] = m.start[i] - self.lock_offset[i];
+                }
+            }
+        }
+        p
+    }
+
+    /// Command positions (physical) at `t`.
+    fn command_pos(&self, t: Micros) -> Pos {
+        match &self.motion {
+            Some(m) => m.pos(t),
+            None => self.cmd,
+        }
+    }
+
+    /// Spindle angle (deg, unwrapped) and speed (rpm) at `t`.
+    fn spindle_at(&self, t: Micros) -> (f64, f64) {
+        if let Some(m) = &self.motion {
+            if let Some((da, rpm)) = m.spindle(t) {
+                if self.machine_lock {
+                    return (self.spindle.angle0, 0.0);
+                }
+                return (self.spindle.angle0 + da, rpm);
+            }
+        }
+        self.spindle.at(t)
+    }
+
+    fn sample_at(&self, t: Micros) -> Sample {
+        let p = self.machine_pos(t);
+        let mut axes = p;
+        if self.diameter_x {
+            axes[0] = p[0] * 2;
+        }
+        let (angle, rpm) = self.spindle_at(t);
+        let mdeg = (angle * 1000.0).round() as i64;
+        Sample { axes, spindle_mrpm: (rpm * 1000.0).round() as i64, spindle_mdeg: mdeg.rem_euclid(360_000) }
+    }
+
+    fn finish(&mut self, reason: EndReason) {
+        if self.finished.is_some() {
+            return;
+        }
+        self.finished = Some(reason.clone());
+        let state = self.sample_at(self.now);
+        let mut command = self.command_pos(self.now);
+        if self.diameter_x {
+            command[0] *= 2;
+        }
+        let summary = EndSummary {
+            reason,
+            state,
+            command,
+            signals: self.signals,
+            modal: self.interp.modal(),
+            alarms: self.alarms,
+            blocks: self.blocks,
+        };
+        self.emit(Event::End(summary));
+    }
+}

@@ -1,0 +1,224 @@
+//! The axes' motions: rapid (each axis on its own), linear and circular interpolation, and the
+//! synchronised tapping stroke where the tap axis follows the spindle. Positions are evaluated in
+//! closed form at any time.
+
+use super::profile::Profile;
+use crate::plan::{Plane, Pos};
+use crate::trace::AXES;
+use crate::units::{Micros, Nm};
+
+/// The geometry of a motion.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, PartialEq)]
+pub enum Path {
+    /// Each axis its own profile; `backlash` nm of motor travel precede the table's motion.
+    Rapid {
+        /// Per-axis distance profiles.
+        profiles: [Profile; AXES],
+        /// Backlash taken up first, per axis, nm.
+        backlash: [f64; AXES],
+    },
+    /// Straight line, one profile along the path.
+    Line {
+        /// Path profile.
+        profile: Profile,
+        /// Path length, nm.
+        len: f64,
+    },
+    /// Circle or helix in a plane; other axes move linearly with the angle.
+    Arc {
+        /// Path profile.
+        profile: Profile,
+        /// Path length, nm.
+        len: f64,
+        /// Centre (first, second axis of the plane).
+        center: [f64; 2],
+        /// Radius, nm.
+        radius: f64,
+        /// Start angle, rad.
+        a0: f64,
+        /// Signed sweep, rad.
+        sweep: f64,
+        /// Plane.
+        plane: Plane,
+    },
+    /// Rigid tapping stroke: the profile is the motor travel of the tap axis (backlash included);
+    /// the spindle turns travel / lead revolutions.
+    Tap {
+        /// Motor travel profile, nm.
+        profile: Profile,
+        /// Tap axis slot.
+        axis: usize,
+        /// Backlash taken up first, nm.
+        backlash: f64,
+        /// Lead, nm/rev.
+        lead: f64,
+        /// Spindle direction, +1 forward.
+        spin: f64,
+    },
+}
+
+/// One motion in progress.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    /// Start time.
+    pub t0: Micros,
+    /// Command positions at the start.
+    pub start: Pos,
+    /// Command positions at the end.
+    pub target: Pos,
+    /// Geometry and timing.
+    pub path: Path,
+}
+
+impl Motion {
+    /// Duration, µs.
+    pub fn duration(&self) -> Micros {
+        match &self.path {
+            Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.total).max().unwrap_or(0),
+            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
+                profile.total
+            }
+        }
+    }
+
+    /// End time.
+    pub fn end(&self) -> Micros {
+        self.t0 + self.duration()
+    }
+
+    /// Command positions at `t`.
+    pub fn pos(&self, t: Micros) -> Pos {
+        let dt = t.saturating_sub(self.t0);
+        let mut p = self.start;
+        match &self.path {
+            Path::Rapid { profiles, backlash } => {
+                for i in 0..AXES {
+                    let d = self.target[i] - self.start[i];
+                    if d != 0 {
+                        let s = (profiles[i].eval(dt).0 - backlash[i]).max(0.0);
+                        p[i] = self.start[i] + (d.signum() as f64 * s).round() as Nm;
+                    }
+                }
+            }
+            Path::Line { profile, len } => {
+                let f = if *len > 0.0 { profile.eval(dt).0 / len } else { 1.0 };
+                for i in 0..AXES {
+                    p[i] = self.start[i] + ((self.target[i] - self.start[i]) as f64 * f).round() as Nm;
+                }
+            }
+            Path::Arc { profile, len, center, radius, a0, sweep, plane } => {
+                let f = if *len > 0.0 { profile.eval(dt).0 / len } else { 1.0 };
+                let (i0, i1, _) = plane.axes();
+                for i in 0..AXES {
+                    p[i] = self.start[i] + ((self.target[i] - self.start[i]) as f64 * f).round() as Nm;
+                }
+                if f < 1.0 {
+                    let a = a0 + sweep * f;
+                    p[i0] = (center[0] + radius * libm::cos(a)).round() as Nm;
+                    p[i1] = (center[1] + radius * libm::sin(a)).round() as Nm;
+                } else {
+                    p[i0] = self.target[i0];
+                    p[i1] = self.target[i1];
+                }
+            }
+            Path::Tap { profile, axis, backlash, .. } => {
+                let d = self.target[*axis] - self.start[*axis];
+                let s = (profile.eval(dt).0 - backlash).max(0.0);
+                p[*axis] = self.start[*axis] + (d.signum() as f64 * s).round() as Nm;
+                if dt >= profile.total {
+                    p[*axis] = self.target[*axis];
+                }
+            }
+        }
+        if dt >= self.duration() {
+            p = self.target;
+        }
+        p
+    }
+
+    /// For a tapping stroke: the spindle's turned angle (deg, signed) and speed (rpm, signed) at `t`.
+    pub fn spindle(&self, t: Micros) -> Option<(f64, f64)> {
+        match &self.path {
+            Path::Tap { profile, lead, spin, .. } => {
+                let (s, v) = profile.eval(t.saturating_sub(self.t0));
+                Some((spin * s / lead * 360.0, spin * v / lead * 60e6))
+            }
+            _ => None,
+        }
+    }
+
+    /// The tap axis' travel speed (nm/µs) at `t`, for stopping.
+    pub fn speed(&self, t: Micros) -> f64 {
+        let dt = t.saturating_sub(self.t0);
+        match &self.path {
+            Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.eval(dt).1).fold(0.0, f64::max),
+            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
+                profile.eval(dt).1
+            }
+        }
+    }
+
+    /// Replaces the profile(s) by a stop as soon as possible from `t`, decelerating at `a`
+    /// nm/µs² (per-axis rates for rapids use `a` too). The target becomes the stopping point.
+    pub fn stop_at(&mut self, t: Micros, a: f64, period: Micros) {
+        let dt = t.saturating_sub(self.t0);
+        let elapsed = dt;
+        match &mut self.path {
+            Path::Rapid { profiles, .. } => {
+                for p in profiles.iter_mut() {
+                    *p = p.stop_from(dt, a, period);
+                }
+            }
+            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
+                *profile = profile.stop_from(dt, a, period);
+            }
+        }
+        // Re-anchor: the new profiles start at `t` and measure from the old start.
+        self.t0 += elapsed;
+        let end = self.t0 + self.duration();
+        let stop = self.pos_unclamped(end);
+        self.target = stop;
+    }
+
+    fn pos_unclamped(&self, t: Micros) -> Pos {
+        let saved = self.target;
+        let mut m = self.clone();
+        m.target = saved;
+        let dt = t.saturating_sub(m.t0);
+        let mut p = m.start;
+        match &m.path {
+            Path::Rapid { profiles, backlash } => {
+                for i in 0..AXES {
+                    let d = m.target[i] - m.start[i];
+                    if d != 0 {
+                        let s = (profiles[i].eval(dt).0 - backlash[i]).max(0.0);
+                        p[i] = m.start[i] + (d.signum() as f64 * s).round() as Nm;
+                    }
+                }
+            }
+            Path::Line { profile, len } => {
+                let f = if *len > 0.0 { profile.eval(dt).0 / len } else { 1.0 };
+                for i in 0..AXES {
+                    p[i] = m.start[i] + ((m.target[i] - m.start[i]) as f64 * f).round() as Nm;
+                }
+            }
+            Path::Arc { profile, len, center, radius, a0, sweep, plane } => {
+                let f = profile.eval(dt).0 / len.max(1.0);
+                let (i0, i1, _) = plane.axes();
+                for i in 0..AXES {
+                    p[i] = m.start[i] + ((m.target[i] - m.start[i]) as f64 * f).round() as Nm;
+                }
+                let a = a0 + sweep * f;
+                p[i0] = (center[0] + radius * libm::cos(a)).round() as Nm;
+                p[i1] = (center[1] + radius * libm::sin(a)).round() as Nm;
+            }
+            Path::Tap { profile, axis, backlash, .. } => {
+                let d = m.target[*axis] - m.start[*axis];
+                let s = (profile.eval(dt).0 - backlash).max(0.0);
+                p[*axis] = m.start[*axis] + (d.signum() as f64 * s).round() as Nm;
+            }
+        }
+        p
+    }
+}

@@ -1,0 +1,154 @@
+//! Velocity profiles: closed-form distance and speed over time for one motion (constant
+//! acceleration ramps, cruise, deceleration), stretched to whole interpolation periods.
+
+use crate::units::{ceil_to, Micros};
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Piece {
+    t0: f64,
+    s0: f64,
+    v0: f64,
+    a: f64,
+}
+
+/// Distance travelled (nm, ≥ 0) against time since the motion started (µs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Profile {
+    pieces: [Piece; 3],
+    n: usize,
+    /// Total distance, nm.
+    pub dist: f64,
+    /// Duration, µs (a whole number of interpolation periods).
+    pub total: Micros,
+}
+
+impl Profile {
+    /// A motion of `dist` nm at up to `v` nm/µs with acceleration `a` nm/µs² (`a` infinite or
+    /// 0: no ramp), duration rounded up to whole `period`s by slowing the whole profile evenly.
+    pub fn trapezoid(dist: f64, v: f64, a: f64, period: Micros) -> Profile {
+        if dist <= 0.0 || v <= 0.0 || !v.is_finite() {
+            return Profile::still();
+        }
+        let a = if a > 0.0 && a.is_finite() { a } else { f64::INFINITY };
+        let vmax = v.max(1e-12);
+        let (mut v, mut ta, mut tc) = (vmax, 0.0, dist / vmax);
+        if a.is_finite() {
+            ta = vmax / a;
+            let d_acc = 0.5 * vmax * ta;
+            if 2.0 * d_acc >= dist {
+                v = (dist * a).sqrt();
+                ta = v / a;
+                tc = 0.0;
+            } else {
+                tc = (dist - 2.0 * d_acc) / vmax;
+            }
+        }
+        let ideal = 2.0 * ta + tc;
+        let total = ceil_to((ideal.ceil() as Micros).max(1), period.max(1));
+        let k = total as f64 / ideal;
+        ta *= k;
+        tc *= k;
+        v /= k;
+        let acc = if ta > 0.0 { v / ta } else { 0.0 };
+        let d1 = 0.5 * v * ta;
+        let d2 = d1 + v * tc;
+        Profile {
+            pieces: [
+                Piece { t0: 0.0, s0: 0.0, v0: 0.0, a: acc },
+                Piece { t0: ta, s0: d1, v0: v, a: 0.0 },
+                Piece { t0: ta + tc, s0: d2, v0: v, a: -acc },
+            ],
+            n: 3,
+            dist,
+            total,
+        }
+    }
+
+    /// A motion that does not move.
+    pub fn still() -> Profile {
+        Profile { pieces: [Piece { t0: 0.0, s0: 0.0, v0: 0.0, a: 0.0 }; 3], n: 1, dist: 0.0, total: 0 }
+    }
+
+    /// Distance and speed (nm, nm/µs) at `t` µs after the start.
+    pub fn eval(&self, t: Micros) -> (f64, f64) {
+        if t >= self.total {
+            return (self.dist, 0.0);
+        }
+        let t = t as f64;
+        let mut p = &self.pieces[0];
+        for q in &self.pieces[1..self.n] {
+            if q.t0 <= t {
+                p = q;
+            }
+        }
+        let dt = t - p.t0;
+        let s = (p.s0 + p.v0 * dt + 0.5 * p.a * dt * dt).clamp(0.0, self.dist);
+        (s, (p.v0 + p.a * dt).max(0.0))
+    }
+
+    /// The profile of stopping as soon as possible from `t`: decelerate at `a` nm/µs² (infinite:
+    /// at once), in whole periods. Distances are measured from the original start.
+    pub fn stop_from(&self, t: Micros, a: f64, period: Micros) -> Profile {
+        let (s0, v0) = self.eval(t);
+        if v0 <= 0.0 || !a.is_finite() || a <= 0.0 {
+            return Profile { dist: s0, total: 0, ..Profile::still() }.offset(s0);
+        }
+        let total = ceil_to(((v0 / a).ceil() as Micros).max(1), period.max(1));
+        let a = v0 / total as f64;
+        let dist = (s0 + 0.5 * v0 * total as f64).min(self.dist);
+        Profile { pieces: [Piece { t0: 0.0, s0, v0, a: -a }; 3], n: 1, dist, total }
+    }
+
+    fn offset(mut self, s0: f64) -> Profile {
+        self.pieces[0].s0 = s0;
+        self.dist = s0;
+        self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trapezoid_reaches_its_distance_in_whole_periods() {
+        // 10 mm at 1000 mm/min with a 100 ms ramp.
+        let v = 1e9 / 60e6;
+        let p = Profile::trapezoid(10e6, v, v / 100_000.0, 1000);
+        assert_eq!(p.total % 1000, 0);
+        assert!(p.total >= 600_000 && p.total <= 702_000, "{}", p.total);
+        assert_eq!(p.eval(p.total).0, 10e6);
+        assert_eq!(p.eval(0).0, 0.0);
+        let (mid, vmid) = p.eval(p.total / 2);
+        assert!((mid - 5e6).abs() < 1.0, "{mid}");
+        assert!(vmid > 0.0);
+    }
+
+    #[test]
+    fn short_moves_become_triangles_and_stay_monotonic() {
+        let p = Profile::trapezoid(1000.0, 1.0, 1e-5, 2000);
+        let mut last = 0.0;
+        for t in (0..=p.total).step_by(100) {
+            let s = p.eval(t).0;
+            assert!(s >= last);
+            last = s;
+        }
+        assert_eq!(last, 1000.0);
+    }
+
+    #[test]
+    fn stop_from_decelerates_past_the_point_but_not_past_the_end() {
+        let p = Profile::trapezoid(10e6, 0.1, 1e-5, 1000);
+        let t = p.total / 2;
+        let (s, v) = p.eval(t);
+        let q = p.stop_from(t, 1e-5, 1000);
+        assert!(q.dist > s && q.dist <= p.dist);
+        assert!((q.total as f64) >= v / 1e-5);
+        assert_eq!(q.eval(0).0, s);
+    }
+
+    #[test]
+    fn zero_distance_takes_no_time() {
+        assert_eq!(Profile::trapezoid(0.0, 1.0, 1.0, 1000).total, 0);
+    }
+}

@@ -1,0 +1,311 @@
+//! Carrying out one planned step: starting motions, functions, handshakes, dwells and stops.
+
+use super::motion::{Motion, Path};
+use super::profile::Profile;
+use super::{Active, AfterAwait, Exec};
+use crate::alarm::{Alarm, AlarmKind};
+use crate::plan::{Feed, Plane, Pos, SpindleEffect, Step, TapMove};
+use crate::trace::{EndReason, Event, Signal, AXES};
+use crate::units::ceil_to;
+
+impl Exec<'_> {
+    /// Takes the next step (reading the next block when the queue is empty) and starts it.
+    pub(super) fn start_next(&mut self) {
+        let Some(step) = self.steps.pop_front() else {
+            if self.block_done && self.single_block && !self.hold_suppressed {
+                self.block_done = false;
+                self.hold();
+                return;
+            }
+            self.block_done = false;
+            self.read_block();
+            return;
+        };
+        self.start_step(step);
+        if self.steps.is_empty() && self.active == Active::Idle {
+            self.block_done = true;
+        }
+    }
+
+    fn read_block(&mut self) {
+        let Some(block) = self.program.blocks.get(self.pc) else {
+            self.finish(EndReason::ProgramEnd);
+            return;
+        };
+        self.pc += 1;
+        self.blocks += 1;
+        self.emit(Event::Block { line: block.line, text: block.text.clone() });
+        let mut out = Vec::new();
+        match self.interp.block(block, &mut out) {
+            Ok(()) => self.steps.extend(out),
+            Err(a) => self.raise(a),
+        }
+    }
+
+    fn start_step(&mut self, step: Step) {
+        let now = self.now;
+        match step {
+            Step::Phase(p) => self.set_phase(p),
+            Step::Rapid { target } => self.start_rapid(target),
+            Step::Feed { target, feed } => {
+                let len = path_len(&self.cmd, &target);
+                if let Some(v) = self.feed_speed(feed) {
+                    let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
+                    let profile = Profile::trapezoid(len, v, a, self.cfg.period_us);
+                    self.start_motion(target, Path::Line { profile, len });
+                }
+            }
+            Step::Arc { target, center, plane, clockwise, feed } => {
+                self.start_arc(target, center, plane, clockwise, feed)
+            }
+            Step::Dwell { us } => self.active = Active::Until(ceil_to(now + us, self.cfg.period_us)),
+            Step::Function { letter, code, effect } => self.start_function(letter, code, effect),
+            Step::RigidEnter { code, rpm } => {
+                self.emit(Event::Function { letter: 'M', code });
+                let (_, rpm_now) = self.spindle.at(now);
+                self.pre_rigid_rpm = Some(self.pre_rigid_rpm.unwrap_or(rpm_now));
+                self.s_cmd = rpm;
+                self.spindle.command(now, 0.0);
+                self.spindle.position_mode = true;
+                self.set_signal(Signal::Mf, true);
+                self.set_signal(Signal::Rtap, true);
+                self.plc.rigid_strobe(now);
+                self.active = Active::Await {
+                    signal: Signal::Fin,
+                    value: true,
+                    then: AfterAwait::EndStrobe(Signal::Mf),
+                };
+                self.check_await();
+            }
+            Step::RigidCheck { alarm } => {
+                if !self.signals.get(Signal::Rgtap) {
+                    self.raise(Alarm::new(alarm, "RGTAP (G61.0) is 0 when the rigid tapping cycle starts"));
+                }
+            }
+            Step::RigidExit { wait_rgtap } => {
+                self.set_signal(Signal::Rtap, false);
+                self.plc.rigid_exit(now);
+                self.spindle.position_mode = false;
+                let (a, _) = self.spindle.at(now);
+                self.spindle.hold(now, a);
+                self.pre_rigid_rpm = None;
+                if wait_rgtap && self.signals.get(Signal::Rgtap) {
+                    self.active =
+                        Active::Await { signal: Signal::Rgtap, value: false, then: AfterAwait::Nothing };
+                }
+            }
+            Step::Tap(t) => self.start_tap(t),
+            Step::HoldSuppress(b) => {
+                self.hold_suppressed = b;
+                if !b && self.hold_pending {
+                    self.hold_pending = false;
+                    self.hold();
+                }
+            }
+            Step::Overload(w) => {
+                self.overload = w;
+                self.over_since = None;
+                if let Some(w) = w {
+                    self.overload_check(w);
+                }
+            }
+            Step::Orient => {
+                let (a, _) = self.spindle.at(now);
+                let done = ceil_to(now + self.cfg.orient_us, self.cfg.period_us);
+                self.spindle.hold(done, (a / 360.0).ceil() * 360.0);
+                self.active = Active::Until(done);
+            }
+            Step::Stop { optional } => {
+                if !optional || self.optional_stop {
+                    self.hold();
+                }
+            }
+            Step::End => self.finish(EndReason::ProgramEnd),
+            Step::Alarm(a) => self.raise(a),
+        }
+    }
+
+    /// Stops automatic operation until cycle start (or goes on at once in a batch run).
+    pub(super) fn hold(&mut self) {
+        if self.opts.auto_cycle_start {
+            return;
+        }
+        self.set_signal(Signal::Stl, false);
+        self.set_signal(Signal::Spl, true);
+        self.active = Active::Held;
+    }
+
+    fn feed_speed(&mut self, feed: Feed) -> Option<f64> {
+        let nm_per_min = match feed {
+            Feed::PerMin(f) => f,
+            Feed::PerRev(f) => f * self.spindle.at(self.now).1.abs(),
+        };
+        if nm_per_min <= 0.0 {
+            self.raise(Alarm::new(AlarmKind::FeedZero, "feed per revolution with the spindle stopped"));
+            return None;
+        }
+        let mut v = nm_per_min * self.feed_override as f64 / 100.0;
+        if self.dry_run {
+            v = self.cfg.dry_run_nm_min * self.feed_override as f64 / 100.0;
+        }
+        Some(v.min(self.cfg.feed_max_nm_min) / 60e6)
+    }
+
+    fn start_rapid(&mut self, target: Pos) {
+        let mut profiles = [Profile::still(); AXES];
+        let mut backlash = [0.0; AXES];
+        for i in 0..AXES {
+            let d = target[i] - self.cmd[i];
+            if d == 0 {
+                continue;
+            }
+            let b = self.backlash(i, d.signum() as i8);
+            let v = self.cfg.rapid_nm_min[i] / 60e6;
+            let a = v / self.cfg.rapid_ramp_us[i].max(1) as f64;
+            profiles[i] = Profile::trapezoid(d.abs() as f64 + b, v, a, self.cfg.period_us);
+            backlash[i] = b;
+        }
+        self.start_motion(target, Path::Rapid { profiles, backlash });
+    }
+
+    /// Backlash to take up when axis `i` moves in direction `dir` (and records the direction).
+    fn backlash(&mut self, i: usize, dir: i8) -> f64 {
+        let last = self.last_dir[i];
+        self.last_dir[i] = dir;
+        if last != 0 && last != dir {
+            self.cfg.backlash_nm[i] as f64
+        } else {
+            0.0
+        }
+    }
+
+    fn start_arc(&mut self, target: Pos, center: [i64; 2], plane: Plane, cw: bool, feed: Feed) {
+        let (i0, i1, i2) = plane.axes();
+        let c = [center[0] as f64, center[1] as f64];
+        let s = self.cmd;
+        let (sx, sy) = (s[i0] as f64 - c[0], s[i1] as f64 - c[1]);
+        let (ex, ey) = (target[i0] as f64 - c[0], target[i1] as f64 - c[1]);
+        let radius = libm::hypot(sx, sy);
+        let a0 = libm::atan2(sy, sx);
+        let a1 = libm::atan2(ey, ex);
+        let tau = std::f64::consts::TAU;
+        let mut sweep = a1 - a0;
+        if cw {
+            while sweep >= 0.0 {
+                sweep -= tau;
+            }
+        } else {
+            while sweep <= 0.0 {
+                sweep += tau;
+            }
+        }
+        let full_turn = (target[i0] == s[i0] && target[i1] == s[i1]) as u8;
+        if full_turn == 0 && sweep.abs() > tau - 1e-12 {
+            sweep = 0.0;
+        }
+        let h = (target[i2] - s[i2]) as f64;
+        let len = libm::hypot(radius * sweep.abs(), h);
+        if let Some(v) = self.feed_speed(feed) {
+            let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
+            let profile = Profile::trapezoid(len, v, a, self.cfg.period_us);
+            self.start_motion(target, Path::Arc { profile, len, center: c, radius, a0, sweep, plane });
+        }
+    }
+
+    fn start_tap(&mut self, t: TapMove) {
+        let now = self.now;
+        let d = t.target - self.cmd[t.axis];
+        let b = if d != 0 { self.backlash(t.axis, d.signum() as i8) } else { 0.0 };
+        let rpm = t.rpm.min(self.cfg.rigid_max_rpm.max(1)) as f64 * t.override_pct.max(1) as f64 / 100.0;
+        let lead = t.lead_nm as f64;
+        let v = rpm * lead / 60e6;
+        // Spindle and tap axis share one time constant at the rigid tapping maximum speed.
+        let a_rpm = self.cfg.rigid_max_rpm.max(1) as f64 / self.cfg.rigid_ramp_us.max(1) as f64;
+        let a = a_rpm * lead / 60e6;
+        let profile = Profile::trapezoid(d.unsigned_abs() as f64 + b, v, a, self.cfg.period_us);
+        let spin = if t.spindle_forward { 1.0 } else { -1.0 };
+        let (angle, _) = self.spindle.at(now);
+        self.spindle.hold(now, angle);
+        self.set_signal(if t.spindle_forward { Signal::Rgspp } else { Signal::Rgspm }, true);
+        let mut target = self.cmd;
+        target[t.axis] = t.target;
+        self.start_motion(target, Path::Tap { profile, axis: t.axis, backlash: b, lead, spin });
+        if self.spindle.stalled {
+            let alarm_at = now + self.cfg.plc.spindle_stall_us;
+            self.plc.at(alarm_at, super::plc::PlcAction::StallTimer);
+        }
+    }
+
+    fn start_motion(&mut self, target: Pos, path: Path) {
+        let m = Motion { t0: self.now, start: self.cmd, target, path };
+        if m.duration() == 0 {
+            self.cmd = target;
+            return;
+        }
+        self.motion = Some(m);
+        self.active = Active::Moving;
+    }
+
+    /// The present motion reached its end.
+    pub(super) fn end_motion(&mut self) {
+        let Some(m) = self.motion.take() else { return };
+        let end = m.end();
+        if let Some((da, _)) = m.spindle(end) {
+            let angle = if self.machine_lock { self.spindle.angle0 } else { self.spindle.angle0 + da };
+            self.spindle.hold(end, angle);
+            self.set_signal(Signal::Rgspp, false);
+            self.set_signal(Signal::Rgspm, false);
+        }
+        if self.machine_lock {
+            for i in 0..AXES {
+                self.lock_offset[i] += m.target[i] - m.start[i];
+            }
+        }
+        self.cmd = m.target;
+    }
+
+    fn start_function(&mut self, letter: char, code: u32, effect: SpindleEffect) {
+        let now = self.now;
+        self.emit(Event::Function { letter, code });
+        let strobe = match letter {
+            'S' => Signal::Sf,
+            'T' => Signal::Tf,
+            _ => Signal::Mf,
+        };
+        let max = self.cfg.spindle_max_rpm as f64;
+        let speed = (self.s_cmd as f64 * self.spindle_override as f64 / 100.0).min(max);
+        match effect {
+            SpindleEffect::None => {}
+            SpindleEffect::Forward => self.spindle.command(now, speed),
+            SpindleEffect::Reverse => self.spindle.command(now, -speed),
+            SpindleEffect::Stop => self.spindle.command(now, 0.0),
+            SpindleEffect::Orient => {
+                let (a, _) = self.spindle.at(now);
+                let a = (a / 360.0).ceil() * 360.0;
+                self.spindle.hold(now + self.cfg.orient_us, a);
+            }
+            SpindleEffect::Speed(s) => {
+                self.s_cmd = s;
+                let (_, rpm) = self.spindle.at(now);
+                if rpm != 0.0 && !self.spindle.position_mode {
+                    let s = (s as f64 * self.spindle_override as f64 / 100.0).min(max);
+                    self.spindle.command(now, s * rpm.signum());
+                }
+            }
+        }
+        self.set_signal(strobe, true);
+        self.plc.strobe(now);
+        self.active = Active::Await { signal: Signal::Fin, value: true, then: AfterAwait::EndStrobe(strobe) };
+        self.check_await();
+    }
+}
+
+/// Euclidean length between two positions, nm.
+fn path_len(a: &Pos, b: &Pos) -> f64 {
+    let mut s = 0.0;
+    for i in 0..AXES {
+        let d = (b[i] - a[i]) as f64;
+        s += d * d;
+    }
+    s.sqrt()
+}

@@ -1,0 +1,1 @@
+//! Drilling and conventional tapping cycles.

@@ -1,0 +1,178 @@
+//! Plan: what a block or a cycle becomes — a sequence of [`Step`]s (motions, dwells, PLC actions,
+//! waits) that the executor carries out in order.
+//!
+//! Each cycle's whole story is one builder in its own file ([`rigid_tap`], [`drill`]); the executor
+//! has no cycle-specific code.
+
+pub mod drill;
+pub mod rigid_tap;
+
+use crate::alarm::{Alarm, AlarmKind};
+use crate::input::CurrentSource;
+use crate::trace::{Phase, AXES};
+use crate::units::{Micros, Nm};
+
+/// Physical positions of every axis slot (radius for a lathe's X), nm or nano-degrees.
+pub type Pos = [Nm; AXES];
+
+/// A feed rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Feed {
+    /// nm per minute along the path.
+    PerMin(f64),
+    /// nm per spindle revolution along the path.
+    PerRev(f64),
+}
+
+/// The plane of an arc or of a drilling cycle (the tool axis is normal to it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    /// G17: XY, tool along Z.
+    Xy,
+    /// G18: ZX, tool along Y.
+    Zx,
+    /// G19: YZ, tool along X.
+    Yz,
+}
+
+impl Plane {
+    /// The two axis slots of the plane (first, second) and the normal axis.
+    pub fn axes(self) -> (usize, usize, usize) {
+        match self {
+            Plane::Xy => (0, 1, 2),
+            Plane::Zx => (2, 0, 1),
+            Plane::Yz => (1, 2, 0),
+        }
+    }
+}
+
+/// What an M function does to the spindle model when it is output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpindleEffect {
+    /// Nothing.
+    None,
+    /// M03: turn forward at the commanded speed.
+    Forward,
+    /// M04: turn in reverse at the commanded speed.
+    Reverse,
+    /// M05: stop.
+    Stop,
+    /// M19 / reference return: stop at angle 0.
+    Orient,
+    /// S word: new commanded speed, rpm.
+    Speed(u32),
+}
+
+/// One synchronised (rigid) tapping stroke: the tap axis follows the spindle, travel = lead ×
+/// revolutions, both under one acceleration profile.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TapMove {
+    /// Tap axis slot.
+    pub axis: usize,
+    /// End of the stroke on the tap axis (physical nm).
+    pub target: Nm,
+    /// Lead in nm per revolution (> 0).
+    pub lead_nm: i64,
+    /// Programmed spindle speed, rpm (> 0).
+    pub rpm: u32,
+    /// Spindle direction during this stroke: true = forward (M03 sense).
+    pub spindle_forward: bool,
+    /// Speed override of this stroke in % (extraction override on retracts), 100 = none.
+    pub override_pct: u32,
+    /// Cutting stroke (into the material) rather than a retract.
+    pub cutting: bool,
+}
+
+/// The overload watch of a GSK rigid tapping cycle (word D or parameter 271).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OverloadWatch {
+    /// Threshold, % of rated current.
+    pub threshold_pct: u32,
+    /// Which motor (parameter 186 bit 5).
+    pub source: CurrentSource,
+    /// The current must stay above the threshold this long (parameter 270).
+    pub delay_us: Micros,
+    /// Where the tap retracts to (the cycle's start point on the tap axis).
+    pub return_to: Nm,
+}
+
+/// One thing the executor does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// The machining phase changes (reported in the trace).
+    Phase(Phase),
+    /// Positioning: each axis at its own rapid rate, independently.
+    Rapid {
+        /// End positions.
+        target: Pos,
+    },
+    /// Linear interpolation at a feed.
+    Feed {
+        /// End positions.
+        target: Pos,
+        /// Feed rate.
+        feed: Feed,
+    },
+    /// Circular (helical) interpolation.
+    Arc {
+        /// End positions.
+        target: Pos,
+        /// Centre in the plane (first, second axis).
+        center: [Nm; 2],
+        /// Plane.
+        plane: Plane,
+        /// Clockwise (G02) when seen from the positive normal.
+        clockwise: bool,
+        /// Feed rate.
+        feed: Feed,
+    },
+    /// Dwell.
+    Dwell {
+        /// Duration in µs.
+        us: Micros,
+    },
+    /// An M, S or T function: strobe, effect, wait for FIN.
+    Function {
+        /// `M`, `S` or `T`.
+        letter: char,
+        /// Its number.
+        code: u32,
+        /// What it does to the spindle.
+        effect: SpindleEffect,
+    },
+    /// M29: the rigid tapping handshake (F76.3, position mode, RGTAP, FIN).
+    RigidEnter {
+        /// The M code to output (29, or the value of Fanuc 5210).
+        code: u32,
+        /// The rigid tapping speed, rpm.
+        rpm: u32,
+    },
+    /// Checks that RGTAP is on; raises `alarm` otherwise.
+    RigidCheck {
+        /// The dialect's alarm for a missing RGTAP.
+        alarm: AlarmKind,
+    },
+    /// Leaves rigid tapping mode: F76.3 falls; with `wait_rgtap`, the next step waits for RGTAP
+    /// to fall (RTCRG = 0).
+    RigidExit {
+        /// Wait for RGTAP to fall before going on.
+        wait_rgtap: bool,
+    },
+    /// A synchronised tapping stroke.
+    Tap(TapMove),
+    /// Spindle reference return (orientation) before rigid tapping (GSK RTORI).
+    Orient,
+    /// Feed hold and single block suppressed (true) or honoured again (false).
+    HoldSuppress(bool),
+    /// Sets or clears the overload watch.
+    Overload(Option<OverloadWatch>),
+    /// M00 (optional = false) or M01 (optional = true): program stop.
+    Stop {
+        /// M01.
+        optional: bool,
+    },
+    /// M02 / M30: end of program.
+    End,
+    /// Raise an alarm at this point of the execution and stop.
+    Alarm(Alarm),
+}
