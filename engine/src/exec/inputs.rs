@@ -203,8 +203,9 @@ impl Exec<'_> {
         self.emit(Event::Input { name: "overload_trip".into(), value: format!("{}%", w.threshold_pct) });
         let Some((axis, lead, spin)) = tap else { return };
         if let Some(m) = &mut self.motion {
-            let a = m.speed(self.now) / (self.cfg.rigid_ramp_us.max(1) as f64);
-            m.stop_at(self.now, a.max(1e-9), self.cfg.period_us);
+            // The same constant acceleration as the stroke's own ramps (COM-SYNC-02).
+            let a_rpm = self.cfg.rigid_max_rpm.max(1) as f64 / self.cfg.rigid_ramp_us.max(1) as f64;
+            m.stop_at(self.now, a_rpm * lead / 60e6, self.cfg.period_us);
         }
         self.steps.clear();
         self.steps.push_back(Step::Phase(Phase::OverloadRetract));

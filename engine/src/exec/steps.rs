@@ -44,6 +44,12 @@ impl Exec<'_> {
 
     fn start_step(&mut self, step: Step) {
         let now = self.now;
+        // A new strobe waits until the ladder has dropped FIN of the previous one (COM-PLC-01).
+        if matches!(step, Step::Function { .. } | Step::RigidEnter { .. }) && self.signals.get(Signal::Fin) {
+            self.steps.push_front(step);
+            self.active = Active::Await { signal: Signal::Fin, value: false, then: AfterAwait::Nothing };
+            return;
+        }
         match step {
             Step::Phase(p) => self.set_phase(p),
             Step::Rapid { target } => self.start_rapid(target),

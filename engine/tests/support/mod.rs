@@ -31,7 +31,9 @@ pub fn events(trace: &Trace) -> String {
             Event::Alarm(a) => format!("alarm {} {}", a.kind.code(), a.message()),
             Event::Phase(p) => format!("phase {}", p.name()),
             Event::Input { name, value } => format!("input {name} {value}"),
-            Event::End(end) => format!("end {} blocks={} alarms={}", end.reason.name(), end.blocks, end.alarms),
+            Event::End(end) => {
+                format!("end {} blocks={} alarms={}", end.reason.name(), end.blocks, end.alarms)
+            }
         };
         s.push_str(&format!("{:>10} {line}\n", e.t_us));
     }

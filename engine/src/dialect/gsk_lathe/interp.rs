@@ -516,7 +516,10 @@ impl Interpreter for GskInterp {
             }
         }
         self.units.inch = self.inch;
-        self.feed_word(&w)?;
+        let tapping = cycle_g.is_some() || (self.motion == 840 || self.motion == 880) && motion_set.is_none();
+        if !tapping {
+            self.feed_word(&w)?;
+        }
         let mut m_codes = Vec::new();
         for &(code, word) in &w.m {
             if code == self.cfg.clamp_code && cycle_m_ok && code != 29 {
