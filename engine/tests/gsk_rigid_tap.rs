@@ -353,3 +353,53 @@ fn com_time_same_input_same_trace() {
     let b = run_default("gsk-lathe", &prog("G88 X-50 P3000 Q20000 R0.5 F2;"));
     assert_eq!(a, b);
 }
+
+fn manual(inputs: InputSchedule) -> RunOptions {
+    RunOptions { inputs, auto_cycle_start: false, ..RunOptions::default() }
+}
+
+#[test]
+fn gsk_rt_feed_hold_while_tapping_waits_for_the_end_of_the_retract() {
+    // GSK-RT-27: feed hold at 1.0 s (cutting) takes effect only when the return is complete.
+    let inputs = InputSchedule::default().at(1_000_000, Input::FeedHold).at(20_000_000, Input::CycleStart);
+    let t = run("gsk-lathe", &[], &prog("G84 Z-20 F1;"), &manual(inputs));
+    assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd, "{}", support::events(&t));
+    let spl = t.edges(Signal::Spl).find(|e| e.1).unwrap().0;
+    let last_retract_end = t.edges(Signal::Rgspm).filter(|e| !e.1).last().unwrap().0;
+    assert!(spl >= last_retract_end, "hold at {spl}, retract ended at {last_retract_end}");
+    let min_z = t.samples().map(|(_, s)| s.axes[2]).min().unwrap();
+    assert_eq!(min_z, -20 * MM, "the tap went to the bottom in one stroke");
+}
+
+#[test]
+fn com_inp_feed_hold_on_a_feed_move_decelerates_and_resumes_to_the_same_end() {
+    // COM-INP-02: G01 hold mid-move, cycle start, the move finishes at its programmed end.
+    let text = "G98 G0 X0 Z0;\nG1 Z-100 F600;\nM30;\n";
+    let inputs = InputSchedule::default().at(3_000_000, Input::FeedHold).at(5_000_000, Input::CycleStart);
+    let t = run("gsk-lathe", &[], text, &manual(inputs));
+    assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd, "{}", support::events(&t));
+    assert_eq!(t.end().unwrap().state.axes[2], -100 * MM);
+    let z = |ts: u64| t.samples().find(|(s, _)| *s == ts).unwrap().1.axes[2];
+    assert_eq!(z(3_500_000), z(4_900_000), "standing still while held");
+    assert!(z(3_500_000) < -29 * MM && z(3_500_000) > -32 * MM, "{}", z(3_500_000));
+}
+
+#[test]
+fn com_inp_single_block_stops_after_each_block() {
+    // COM-INP-03: three blocks, single block on: three stops, each released by cycle start.
+    let text = "G98 G0 X10 Z0;\nG0 Z-5;\nG0 X20;\n";
+    let mut inputs = InputSchedule::default().at(0, Input::SingleBlock(true));
+    for k in 1..=3 {
+        inputs = inputs.at(k * 2_000_000, Input::CycleStart);
+    }
+    let t = run("gsk-lathe", &[], text, &manual(inputs));
+    assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd);
+    assert_eq!(t.edges(Signal::Spl).filter(|e| e.1).count(), 3);
+    let blocks: Vec<u64> = t
+        .events
+        .iter()
+        .filter(|e| matches!(e.event, nc_engine::Event::Block { .. }))
+        .map(|e| e.t_us)
+        .collect();
+    assert_eq!(&blocks[1..], &[2_000_000, 4_000_000]);
+}

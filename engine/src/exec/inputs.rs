@@ -104,21 +104,28 @@ impl Exec<'_> {
     /// Feed hold outside rigid tapping: a motion decelerates to a stop, then the control waits
     /// for cycle start and carries on with the rest of the move.
     fn feed_hold_now(&mut self) {
-        if let Some(m) = &self.motion {
-            let target = m.target;
-            let remaining = match &m.path {
-                Path::Rapid { .. } => Some(Step::Rapid { target }),
-                _ => None,
-            };
-            self.stop_motion_now();
-            if let Some(s) = remaining {
+        let period = self.cfg.period_us;
+        let a = match self.motion.as_ref().map(|m| &m.path) {
+            Some(Path::Rapid { .. }) => (0..crate::trace::AXES)
+                .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
+                .fold(f64::INFINITY, f64::min),
+            Some(Path::Tap { lead, .. }) => {
+                self.cfg.rigid_max_rpm.max(1) as f64 / self.cfg.rigid_ramp_us.max(1) as f64 * lead / 60e6
+            }
+            Some(_) => self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64,
+            None => 0.0,
+        };
+        if let Some(m) = &mut self.motion {
+            // Decelerate along the path, then wait; cycle start carries out the rest of the move.
+            m.stop_at(self.now, a, period);
+            if let Some(s) = self.motion_step.clone() {
                 self.steps.push_front(s);
             }
         }
-        self.hold_force();
+        self.hold_requested = true;
     }
 
-    fn hold_force(&mut self) {
+    pub(super) fn hold_force(&mut self) {
         self.set_signal(Signal::Stl, false);
         self.set_signal(Signal::Spl, true);
         if matches!(self.active, Active::Moving | Active::Idle) {

@@ -100,8 +100,12 @@ pub(crate) struct Exec<'a> {
     alarms: u32,
     blocks: u32,
     finished: Option<EndReason>,
-    /// The block's steps are done and single block asks for a stop.
-    block_done: bool,
+    /// A block has been read and its steps not yet all taken (single block stops after it).
+    in_block: bool,
+    /// Feed hold asked for: stop before the next step.
+    hold_requested: bool,
+    /// The step that started the present motion (re-queued when a hold interrupts it).
+    motion_step: Option<Step>,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -154,7 +158,9 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         alarms: 0,
         blocks: 0,
         finished: None,
-        block_done: false,
+        in_block: false,
+        hold_requested: false,
+        motion_step: None,
     };
     ex.main_loop();
 }

@@ -11,20 +11,25 @@ use crate::units::ceil_to;
 impl Exec<'_> {
     /// Takes the next step (reading the next block when the queue is empty) and starts it.
     pub(super) fn start_next(&mut self) {
+        if self.hold_requested {
+            self.hold_requested = false;
+            self.hold_force();
+            return;
+        }
         let Some(step) = self.steps.pop_front() else {
-            if self.block_done && self.single_block && !self.hold_suppressed {
-                self.block_done = false;
-                self.hold();
+            if self.in_block && self.single_block && !self.hold_suppressed {
+                self.in_block = false;
+                self.hold_force();
                 return;
             }
-            self.block_done = false;
+            self.in_block = false;
             self.read_block();
             return;
         };
-        self.start_step(step);
-        if self.steps.is_empty() && self.active == Active::Idle {
-            self.block_done = true;
+        if matches!(step, Step::Rapid { .. } | Step::Feed { .. } | Step::Arc { .. } | Step::Tap(_)) {
+            self.motion_step = Some(step.clone());
         }
+        self.start_step(step);
     }
 
     fn read_block(&mut self) {
@@ -34,6 +39,7 @@ impl Exec<'_> {
         };
         self.pc += 1;
         self.blocks += 1;
+        self.in_block = true;
         self.emit(Event::Block { line: block.line, text: block.text.clone() });
         let mut out = Vec::new();
         match self.interp.block(block, &mut out) {
@@ -105,7 +111,7 @@ impl Exec<'_> {
                 self.hold_suppressed = b;
                 if !b && self.hold_pending {
                     self.hold_pending = false;
-                    self.hold();
+                    self.hold_requested = true;
                 }
             }
             Step::Overload(w) => {
