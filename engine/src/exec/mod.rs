@@ -169,6 +169,11 @@ impl Exec<'_> {
     fn main_loop(&mut self) {
         self.set_signal(Signal::Stl, true);
         while self.finished.is_none() {
+            // Inputs due now act before the next step starts (COM-INP-01).
+            if self.inputs.get(self.next_input).is_some_and(|(t, _)| *t <= self.now) {
+                self.handle_events_at(self.now);
+                continue;
+            }
             if self.active == Active::Idle {
                 self.start_next();
                 continue;

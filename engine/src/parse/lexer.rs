@@ -83,12 +83,24 @@ impl Cursor<'_> {
     }
 }
 
+/// A program-name line: `O` followed by a name rather than a number (`O ENTER OP AND LAST 3
+/// DIGITS`, `OSTRT`). It names the program and executes nothing (COM-PARSE-07).
+fn is_program_name(line: &str) -> bool {
+    let t = line.trim_start().trim_start_matches('%').trim_start();
+    let mut c = t.chars();
+    matches!(c.next(), Some('O' | 'o'))
+        && c.find(|ch| !is_blank(*ch)).is_some_and(|ch| ch.is_ascii_alphabetic() || ch == '_')
+}
+
 fn error(line: u32, col: u32, len: u32, message: String, expected: impl Into<String>) -> ParseError {
     ParseError { line, col, len: len.max(1), message, expected: expected.into() }
 }
 
 /// Lexes one line (without its line ending). `Ok(None)` when it holds no word to execute.
 fn lex_line(line: &str, line_no: u32, rules: &LexRules) -> Result<Option<Block>, ParseError> {
+    if is_program_name(line) {
+        return Ok(None);
+    }
     let mut cur = Cursor { chars: line.chars().peekable(), col: 1 };
     let mut seq = None;
     let mut block_delete = false;
@@ -113,9 +125,17 @@ fn lex_line(line: &str, line_no: u32, rules: &LexRules) -> Result<Option<Block>,
             }
             '(' => {
                 cur.bump();
+                // Parentheses inside a comment nest (`(#508= (MILL_.25_PROFILE))`, CAM output).
+                let mut depth = 1u32;
                 loop {
                     match cur.bump() {
-                        Some(')') => break,
+                        Some(')') => {
+                            depth -= 1;
+                            if depth == 0 {
+                                break;
+                            }
+                        }
+                        Some('(') => depth += 1,
                         Some(_) => {}
                         None => return Err(error(line_no, col, 1, "unclosed comment".into(), ")")),
                     }
@@ -514,6 +534,12 @@ mod tests {
                 let _ = parse(&text, rules);
             }
         }
+    }
+
+    #[test]
+    fn program_name_lines_execute_nothing() {
+        let rules = LexRules { dialect: "t", letters: "GOXN", semicolon_ends_block: true };
+        assert_eq!(render("O ENTER OP\nOSTRT\nO0001 (W)\nG0 X1", &rules), vec!["3:O1", "4:G0 X1"]);
     }
 
     #[test]

@@ -1,0 +1,109 @@
+//! PLC and drive faults: answers that are late or never come, a stalled spindle, backlash and
+//! orientation timing (COM-PLC-*, COM-INP-*, GSK-RT-19, GSK-RT-28).
+
+mod support;
+
+use nc_engine::input::{Input, InputSchedule, PlcAnswer};
+use nc_engine::trace::{EndReason, Phase, Signal};
+use nc_engine::RunOptions;
+use support::run;
+
+const MM: i64 = 1_000_000;
+const TAP: &str = "G98;\nG0 X50 Z0;\nM29 S1000;\nG84 Z-10 F1;\nG80;\nM30;\n";
+
+fn with(inputs: InputSchedule) -> RunOptions {
+    RunOptions { inputs, ..RunOptions::default() }
+}
+
+fn alarm_codes(t: &nc_engine::Trace) -> Vec<&'static str> {
+    t.alarms().map(|(_, a)| a.kind.code()).collect()
+}
+
+#[test]
+fn com_plc_position_mode_never_reached_raises_5002_after_the_timer() {
+    let inputs = InputSchedule::default()
+        .at(0, Input::PlcAnswer { answer: PlcAnswer::PositionModeReached, extra_us: None });
+    let t = run("gsk-lathe", &[("plc.m29_timeout_ms", None, 1500.0)], TAP, &with(inputs));
+    assert_eq!(alarm_codes(&t), ["5002"]);
+    let sppos = t.edges(Signal::Sppos).next().unwrap().0;
+    let (at, _) = t.alarms().next().unwrap();
+    assert_eq!(at - sppos, 1_500_000);
+    assert_eq!(t.edges(Signal::Rgtap).count(), 0);
+}
+
+#[test]
+fn com_plc_a_late_answer_only_delays_the_cycle() {
+    let inputs = InputSchedule::default()
+        .at(0, Input::PlcAnswer { answer: PlcAnswer::PositionModeReached, extra_us: Some(400_000) });
+    let late = run("gsk-lathe", &[], TAP, &with(inputs));
+    let plain = run("gsk-lathe", &[], TAP, &RunOptions::default());
+    assert!(alarm_codes(&late).is_empty());
+    let first_cut = |t: &nc_engine::Trace| t.edges(Signal::Rgspp).next().unwrap().0;
+    assert_eq!(first_cut(&late) - first_cut(&plain), 400_000);
+}
+
+#[test]
+fn com_plc_fin_never_comes_raises_the_fin_timer_alarm() {
+    let inputs = InputSchedule::default().at(0, Input::PlcAnswer { answer: PlcAnswer::Fin, extra_us: None });
+    let t = run("gsk-lathe", &[], "S500 M3;\nM30;\n", &with(inputs));
+    assert_eq!(alarm_codes(&t), ["NC-1020"]);
+    assert_eq!(t.alarms().next().unwrap().0, 10_000_000);
+}
+
+#[test]
+fn com_plc_rgtap_never_comes_leaves_m29_waiting_until_the_fin_timer() {
+    let inputs =
+        InputSchedule::default().at(0, Input::PlcAnswer { answer: PlcAnswer::Rgtap, extra_us: None });
+    let t = run("gsk-lathe", &[("plc.fin_timeout_ms", None, 3000.0)], TAP, &with(inputs));
+    // FIN and RGTAP come from the same rung: without RGTAP the ladder... still gives FIN, so the
+    // cycle finds RGTAP off when it starts.
+    assert_eq!(alarm_codes(&t), ["NC-1015"]);
+}
+
+#[test]
+fn com_inp_spindle_stall_during_rigid_tapping_raises_5074() {
+    let inputs = InputSchedule::default().at(0, Input::SpindleStall(true));
+    let t = run("gsk-lathe", &[], TAP, &with(inputs));
+    assert_eq!(alarm_codes(&t), ["5074"]);
+    let cut = t.edges(Signal::Rgspp).next().unwrap().0;
+    assert_eq!(t.alarms().next().unwrap().0 - cut, 100_000);
+}
+
+#[test]
+fn com_inp_emergency_stop_stops_at_once_with_its_alarm() {
+    let inputs = InputSchedule::default().at(600_000, Input::EmergencyStop(true));
+    let t = run("gsk-lathe", &[], TAP, &with(inputs));
+    assert_eq!(alarm_codes(&t), ["NC-1030"]);
+    assert_eq!(t.end().unwrap().reason, EndReason::Alarm);
+    assert_eq!(t.alarms().next().unwrap().0, 600_000);
+}
+
+#[test]
+fn gsk_rt_backlash_is_taken_up_on_each_reversal() {
+    // GSK-RT-28: 0.05 mm backlash on Z: the return stroke turns the spindle 0.05 revolutions more
+    // (lead 1 mm) and takes longer; the table positions are unchanged.
+    let plain = run("gsk-lathe", &[], TAP, &RunOptions::default());
+    let b = run("gsk-lathe", &[("34", Some('Z'), 0.05)], TAP, &RunOptions::default());
+    let ret = |t: &nc_engine::Trace| {
+        let e: Vec<_> = t.edges(Signal::Rgspm).collect();
+        e[1].0 - e[0].0
+    };
+    assert!(ret(&b) > ret(&plain), "{} vs {}", ret(&b), ret(&plain));
+    assert_eq!(b.end().unwrap().state.axes[2], 0);
+    assert_eq!(b.samples().map(|(_, s)| s.axes[2]).min().unwrap(), -10 * MM);
+    let turned = |t: &nc_engine::Trace| t.end().unwrap().state.spindle_mdeg;
+    // The return stroke turns in reverse: 0.05 rev = 18° further back.
+    assert_eq!((turned(&plain) - turned(&b)).rem_euclid(360_000), 18_000);
+}
+
+#[test]
+fn gsk_rt_rtori_orients_the_spindle_before_the_first_hole() {
+    // GSK-RT-19: with 186#7 the first cut starts after the orientation time (500 ms).
+    let plain = run("gsk-lathe", &[], TAP, &RunOptions::default());
+    let o = run("gsk-lathe", &[("186.7", None, 1.0)], TAP, &RunOptions::default());
+    let first = |t: &nc_engine::Trace| t.edges(Signal::Rgspp).next().unwrap().0;
+    assert_eq!(first(&o) - first(&plain), 500_000);
+    let cut = o.phases().find(|p| p.1 == Phase::Cutting).unwrap().0;
+    let s = o.samples().find(|(ts, _)| *ts == cut).unwrap().1;
+    assert_eq!(s.spindle_mdeg, 0, "at the reference angle");
+}
