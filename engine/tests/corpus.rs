@@ -69,7 +69,6 @@ fn fanuc_mill_tapping_programs_run_to_the_end() {
         "Unigraphics__NX.Postprocessor__Yama_Seiki_VMB_1600_Fanuc_sample_part_in.ptp",
         "Unigraphics__NX.Postprocessor__Haas_5T.ptp",
         "Unigraphics__NX.Postprocessor__MS_NMV_sample_output.txt",
-        "Unigraphics__NX.Postprocessor__Toyoda_sample_part.ptp",
         "Unigraphics__NX.Postprocessor__makino_v33_output.txt",
     ];
     let m = Machine::new("fanuc-mill").unwrap();
@@ -81,4 +80,25 @@ fn fanuc_mill_tapping_programs_run_to_the_end() {
         assert_eq!(end.reason, EndReason::ProgramEnd, "{name}: {alarms:?}");
         assert!(t.functions().count() > 0, "{name}");
     }
+}
+
+/// The Toyoda sample's post drops `S M03` after the M05 of line 136: its G73 at line 140 feeds
+/// per revolution (G95) with the spindle stopped. The reference stops there with 0011 at that line
+/// instead of hanging. Its tapping part, N1540 to N1750 (float and rigid G84.2), runs to its end.
+#[test]
+fn toyoda_sample_stops_on_its_post_bug_and_its_rigid_taps_run() {
+    let (_, text) = corpus().into_iter().find(|(n, _)| n.contains("Toyoda")).unwrap();
+    let m = Machine::new("fanuc-mill").unwrap();
+    let t = m.run_to_trace(&m.parse(&text).unwrap(), &opts());
+    let (_, a) = t.alarms().next().expect("an alarm");
+    assert_eq!((a.kind.code(), a.line), ("0011", Some(140)), "{}", a.message());
+
+    let start = text.find("N1540").unwrap();
+    let end = text.find("N1760").unwrap();
+    let tail = format!("%\nG20 G90 G95 G17\n{}M30\n%\n", &text[start..end]);
+    let t = m.run_to_trace(&m.parse(&tail).unwrap(), &opts());
+    let alarms: Vec<String> = t.alarms().map(|(_, a)| a.message()).collect();
+    assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd, "{alarms:?}");
+    let rigid_strokes = t.edges(nc_engine::trace::Signal::Rgspp).filter(|e| e.1).count();
+    assert!(rigid_strokes >= 2, "G84.2 holes tapped rigidly: {rigid_strokes}");
 }

@@ -102,6 +102,8 @@ pub(crate) struct Exec<'a> {
     finished: Option<EndReason>,
     /// A block has been read and its steps not yet all taken (single block stops after it).
     in_block: bool,
+    /// Source line of the block being executed (located alarms raised while executing it).
+    cur_line: Option<u32>,
     /// Feed hold asked for: stop before the next step.
     hold_requested: bool,
     /// The step that started the present motion (re-queued when a hold interrupts it).
@@ -159,6 +161,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         blocks: 0,
         finished: None,
         in_block: false,
+        cur_line: None,
         hold_requested: false,
         motion_step: None,
     };
@@ -303,7 +306,10 @@ impl Exec<'_> {
     }
 
     /// Raises an alarm: the machine stops where it is and the run ends.
-    fn raise(&mut self, alarm: Alarm) {
+    fn raise(&mut self, mut alarm: Alarm) {
+        if alarm.line.is_none() {
+            alarm.line = self.cur_line;
+        }
         self.alarms += 1;
         self.emit(Event::Alarm(alarm));
         if let Some(m) = &self.motion {

@@ -33,8 +33,10 @@ pub enum Path {
         len: f64,
         /// Centre (first, second axis of the plane).
         center: [f64; 2],
-        /// Radius, nm.
+        /// Radius at the start, nm.
         radius: f64,
+        /// Radius at the end, nm (differs from `radius` on a spiral).
+        radius_end: f64,
         /// Start angle, rad.
         a0: f64,
         /// Signed sweep, rad.
@@ -107,7 +109,7 @@ impl Motion {
                     p[i] = self.start[i] + ((self.target[i] - self.start[i]) as f64 * f).round() as Nm;
                 }
             }
-            Path::Arc { profile, len, center, radius, a0, sweep, plane } => {
+            Path::Arc { profile, len, center, radius, radius_end, a0, sweep, plane } => {
                 let f = if *len > 0.0 { profile.eval(dt).0 / len } else { 1.0 };
                 let (i0, i1, _) = plane.axes();
                 for i in 0..AXES {
@@ -115,8 +117,9 @@ impl Motion {
                 }
                 if f < 1.0 {
                     let a = a0 + sweep * f;
-                    p[i0] = (center[0] + radius * libm::cos(a)).round() as Nm;
-                    p[i1] = (center[1] + radius * libm::sin(a)).round() as Nm;
+                    let r = radius + (radius_end - radius) * f;
+                    p[i0] = (center[0] + r * libm::cos(a)).round() as Nm;
+                    p[i1] = (center[1] + r * libm::sin(a)).round() as Nm;
                 } else {
                     p[i0] = self.target[i0];
                     p[i1] = self.target[i1];
@@ -203,15 +206,16 @@ impl Motion {
                     p[i] = m.start[i] + ((m.target[i] - m.start[i]) as f64 * f).round() as Nm;
                 }
             }
-            Path::Arc { profile, len, center, radius, a0, sweep, plane } => {
+            Path::Arc { profile, len, center, radius, radius_end, a0, sweep, plane } => {
                 let f = profile.eval(dt).0 / len.max(1.0);
                 let (i0, i1, _) = plane.axes();
                 for i in 0..AXES {
                     p[i] = m.start[i] + ((m.target[i] - m.start[i]) as f64 * f).round() as Nm;
                 }
                 let a = a0 + sweep * f;
-                p[i0] = (center[0] + radius * libm::cos(a)).round() as Nm;
-                p[i1] = (center[1] + radius * libm::sin(a)).round() as Nm;
+                let r = radius + (radius_end - radius) * f;
+                p[i0] = (center[0] + r * libm::cos(a)).round() as Nm;
+                p[i1] = (center[1] + r * libm::sin(a)).round() as Nm;
             }
             Path::Tap { profile, axis, backlash, .. } => {
                 let d = m.target[*axis] - m.start[*axis];

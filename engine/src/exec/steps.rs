@@ -40,6 +40,7 @@ impl Exec<'_> {
         self.pc += 1;
         self.blocks += 1;
         self.in_block = true;
+        self.cur_line = Some(block.line);
         self.emit(Event::Block { line: block.line, text: block.text.clone() });
         let mut out = Vec::new();
         match self.interp.block(block, &mut out) {
@@ -198,6 +199,7 @@ impl Exec<'_> {
         let (sx, sy) = (s[i0] as f64 - c[0], s[i1] as f64 - c[1]);
         let (ex, ey) = (target[i0] as f64 - c[0], target[i1] as f64 - c[1]);
         let radius = libm::hypot(sx, sy);
+        let radius_end = libm::hypot(ex, ey);
         let a0 = libm::atan2(sy, sx);
         let a1 = libm::atan2(ey, ex);
         let tau = std::f64::consts::TAU;
@@ -216,11 +218,14 @@ impl Exec<'_> {
             sweep = 0.0;
         }
         let h = (target[i2] - s[i2]) as f64;
-        let len = libm::hypot(radius * sweep.abs(), h);
+        let len = libm::hypot(0.5 * (radius + radius_end) * sweep.abs(), h);
         if let Some(v) = self.feed_speed(feed) {
             let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
             let profile = Profile::trapezoid(len, v, a, self.cfg.period_us);
-            self.start_motion(target, Path::Arc { profile, len, center: c, radius, a0, sweep, plane });
+            self.start_motion(
+                target,
+                Path::Arc { profile, len, center: c, radius, radius_end, a0, sweep, plane },
+            );
         }
     }
 

@@ -371,7 +371,7 @@ mod tests {
     #[case::empty("", &[])]
     #[case::blank_lines("\n \n\t\n", &[])]
     #[case::comments("(only comment)\nG0 (move) X1 (日本語 ü #[=*)", &["2:G0 X1"])]
-    #[case::first_paren_closes("G0 (a (b) X1", &["1:G0 X1"])]
+    #[case::parens_nest_inside_comments("G0 (a (b) c) X1", &["1:G0 X1"])]
     #[case::semicolon_vendor_note("G98;-----每分钟进给方式", &["1:G98"])]
     #[case::semicolon_rest_ignored("G0 X1 ; Z2 # (", &["1:G0 X1"])]
     #[case::semicolon_only(";comment only\nM30", &["2:M30"])]

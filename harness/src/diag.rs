@@ -1,0 +1,254 @@
+//! Diagnostics for input errors: a message, what was expected, and where in which file.
+//!
+//! One type, [`InputError`], for every error the user can fix in what they gave the harness (an
+//! unreadable file, a parse error, a bad parameter file). It renders two ways:
+//! - on a terminal, with miette's graphical handler (source snippet, label at the span; no colour
+//!   when `NO_COLOR` is set);
+//! - otherwise (a pipe, a file, a test), as plain text whose first line is
+//!   `file:line:col: message; expected …`, followed by the source line and a caret.
+//!
+//! Both forms always contain the `file:line:col` text, so scripts and tests can grep for it.
+
+use std::fmt::Write as _;
+use std::io::{IsTerminal, Write as _};
+
+/// A place in a source text: 1-based line and column (in characters), and the byte range.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Span {
+    /// 1-based line.
+    pub line: u32,
+    /// 1-based column, counted in characters.
+    pub col: u32,
+    /// Byte offset of the start in the source text.
+    pub offset: usize,
+    /// Length in bytes (0 for a point).
+    pub len: usize,
+}
+
+impl Span {
+    /// The span at `line:col` (1-based, characters) of `text`, `len_chars` characters long
+    /// (clamped to the end of that line).
+    pub fn from_line_col(text: &str, line: u32, col: u32, len_chars: u32) -> Span {
+        let line_start = line_start_offset(text, line);
+        let rest = &text[line_start..];
+        let line_text = rest.split('\n').next().unwrap_or("");
+        let line_text = line_text.strip_suffix('\r').unwrap_or(line_text);
+        let mut chars = line_text.char_indices().skip(col.saturating_sub(1) as usize);
+        let start = chars.next().map_or(line_text.len(), |(i, _)| i);
+        let end = line_text[start..]
+            .char_indices()
+            .nth(len_chars as usize)
+            .map_or(line_text.len(), |(i, _)| start + i);
+        Span { line, col, offset: line_start + start, len: end - start }
+    }
+}
+
+/// Byte offset of the start of 1-based `line` in `text` (the end of the text if it has fewer).
+fn line_start_offset(text: &str, line: u32) -> usize {
+    if line <= 1 {
+        return 0;
+    }
+    text.match_indices('\n').nth(line as usize - 2).map_or(text.len(), |(i, _)| i + 1)
+}
+
+/// An error in something the user gave the harness.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InputError {
+    /// The file as the user named it (or `--dialect` and the like for a non-file input).
+    pub file: String,
+    /// What is wrong.
+    pub message: String,
+    /// What would have been accepted, when known.
+    pub expected: Option<String>,
+    /// Where in the file, with the file's text, when known.
+    pub at: Option<(Span, String)>,
+}
+
+impl InputError {
+    /// An error about a whole file (or other input), without a location.
+    pub fn new(file: impl Into<String>, message: impl Into<String>) -> Self {
+        InputError { file: file.into(), message: message.into(), expected: None, at: None }
+    }
+
+    /// An error at `span` of the file whose text is `source`.
+    pub fn at(
+        file: impl Into<String>,
+        source: &str,
+        span: Span,
+        message: impl Into<String>,
+        expected: Option<String>,
+    ) -> Self {
+        InputError {
+            file: file.into(),
+            message: message.into(),
+            expected,
+            at: Some((span, source.to_string())),
+        }
+    }
+
+    /// `file:line:col` (or just `file` without a location).
+    pub fn location(&self) -> String {
+        match &self.at {
+            Some((s, _)) => format!("{}:{}:{}", self.file, s.line, s.col),
+            None => self.file.clone(),
+        }
+    }
+
+    /// `file:line:col: message; expected …`, the first line of the plain form.
+    pub fn headline(&self) -> String {
+        match &self.expected {
+            Some(e) => format!("{}: {}; expected {}", self.location(), self.message, e),
+            None => format!("{}: {}", self.location(), self.message),
+        }
+    }
+
+    /// The plain form: the headline, then the source line with a caret under the span.
+    pub fn render_plain(&self) -> String {
+        let mut out = format!("error: {}\n", self.headline());
+        if let Some((span, source)) = &self.at {
+            let start = line_start_offset(source, span.line);
+            let line_text = source[start..].split('\n').next().unwrap_or("");
+            let line_text = line_text.strip_suffix('\r').unwrap_or(line_text);
+            let num = span.line.to_string();
+            let pad = " ".repeat(num.len());
+            let _ = writeln!(out, "{pad} |");
+            let _ = writeln!(out, "{num} | {line_text}");
+            let in_line = span.offset.saturating_sub(start).min(line_text.len());
+            let prefix: String =
+                line_text[..in_line].chars().map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
+            let width = line_text[in_line..(in_line + span.len).min(line_text.len())].chars().count().max(1);
+            let _ = writeln!(out, "{pad} | {prefix}{}", "^".repeat(width));
+        }
+        out
+    }
+
+    /// The graphical form (miette), with or without colour.
+    pub fn render_fancy(&self, color: bool) -> String {
+        let theme =
+            if color { miette::GraphicalTheme::unicode() } else { miette::GraphicalTheme::unicode_nocolor() };
+        let handler = miette::GraphicalReportHandler::new_themed(theme).without_primary_span_start();
+        let diag = Fancy::from(self);
+        let mut out = String::new();
+        if handler.render_report(&mut out, &diag).is_err() {
+            return self.render_plain();
+        }
+        out
+    }
+
+    /// Prints the error to standard error: graphical on a terminal, plain otherwise.
+    pub fn report(&self) {
+        let stderr = std::io::stderr();
+        let text = if stderr.is_terminal() {
+            let no_color = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+            self.render_fancy(!no_color)
+        } else {
+            self.render_plain()
+        };
+        let mut lock = stderr.lock();
+        let _ = lock.write_all(text.as_bytes());
+        let _ = lock.flush();
+    }
+}
+
+impl std::fmt::Display for InputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.headline())
+    }
+}
+
+impl std::error::Error for InputError {}
+
+/// The miette view of an [`InputError`].
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+#[error("{headline}")]
+struct Fancy {
+    headline: String,
+    #[source_code]
+    src: Option<miette::NamedSource<String>>,
+    #[label("{label}")]
+    span: Option<miette::SourceSpan>,
+    label: String,
+}
+
+impl From<&InputError> for Fancy {
+    fn from(e: &InputError) -> Self {
+        let headline = format!("{}: {}", e.location(), e.message);
+        let label = e.expected.as_deref().map_or_else(|| "here".to_string(), |x| format!("expected {x}"));
+        match &e.at {
+            Some((span, text)) => Fancy {
+                headline,
+                src: Some(miette::NamedSource::new(&e.file, text.clone())),
+                span: Some(miette::SourceSpan::new(span.offset.into(), span.len)),
+                label,
+            },
+            None => Fancy {
+                headline: match &e.expected {
+                    Some(x) => format!("{headline}; expected {x}"),
+                    None => headline,
+                },
+                src: None,
+                span: None,
+                label,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SRC: &str = "G98\r\n\tG0 X50\n#1=5\n";
+
+    #[test]
+    fn span_from_line_col_counts_characters_and_clamps() {
+        let s = Span::from_line_col(SRC, 2, 2, 2);
+        assert_eq!((s.offset, s.len), (6, 2));
+        assert_eq!(&SRC[s.offset..s.offset + s.len], "G0");
+        let s = Span::from_line_col(SRC, 3, 1, 1);
+        assert_eq!(&SRC[s.offset..s.offset + s.len], "#");
+        let s = Span::from_line_col(SRC, 2, 6, 10);
+        assert_eq!(&SRC[s.offset..s.offset + s.len], "50");
+        let s = Span::from_line_col("é#", 1, 2, 1);
+        assert_eq!((s.offset, s.len), (2, 1));
+        let s = Span::from_line_col("ab", 9, 9, 1);
+        assert_eq!((s.offset, s.len), (2, 0));
+    }
+
+    fn err() -> InputError {
+        let span = Span::from_line_col(SRC, 3, 1, 1);
+        InputError::at("prog.nc", SRC, span, "macro variables", Some("a word letter".into()))
+    }
+
+    #[test]
+    fn plain_form_has_location_snippet_and_caret() {
+        let text = err().render_plain();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], "error: prog.nc:3:1: macro variables; expected a word letter");
+        assert_eq!(lines[2], "3 | #1=5");
+        assert_eq!(lines[3], "  | ^");
+    }
+
+    #[test]
+    fn plain_caret_keeps_tabs_aligned() {
+        let span = Span::from_line_col(SRC, 2, 5, 3);
+        let text = InputError::at("p.nc", SRC, span, "m", None).render_plain();
+        assert!(text.contains("2 | \tG0 X50\n  | \t   ^^^\n"), "{text}");
+    }
+
+    #[test]
+    fn fancy_form_has_location_and_label() {
+        let text = err().render_fancy(false);
+        assert!(text.contains("prog.nc:3:1: macro variables"), "{text}");
+        assert!(text.contains("#1=5"), "{text}");
+        assert!(text.contains("expected a word letter"), "{text}");
+        assert!(!text.contains('\x1b'), "{text}");
+    }
+
+    #[test]
+    fn errors_without_location_name_the_file() {
+        let e = InputError::new("missing.nc", "cannot read: No such file");
+        assert_eq!(e.render_plain(), "error: missing.nc: cannot read: No such file\n");
+        assert!(e.render_fancy(false).contains("missing.nc: cannot read"));
+    }
+}

@@ -1,0 +1,353 @@
+//! The JSON Lines trace writer: one JSON object per line, streamed as the engine runs.
+//!
+//! The format (`nc-conform-trace/1`) is documented in `docs/trace-format.md`. Every object has an
+//! integer `t_us` and a `kind`, keys in a fixed order, and numbers written exactly: lengths are
+//! integer nanometres written as millimetres with no trailing zeros (the same text as
+//! [`nc_engine::units::nm_to_mm_string`]), speeds and angles are milli-units written as exact
+//! decimals. The output is a pure function of the events: the same run gives the same bytes.
+//!
+//! Speed matters (long runs sample every millisecond), so lines are formatted by hand into a
+//! reused buffer with no allocation per sample, and written out in large chunks.
+
+use std::io::{self, Write};
+
+use nc_engine::alarm::Alarm;
+use nc_engine::trace::{
+    AxisSpec, EndReason, EndSummary, Event, Sample, Signal, Signals, TraceEvent, TraceMeta, TraceSink, AXES,
+};
+
+/// The value of the meta line's `format` key.
+pub const FORMAT: &str = "nc-conform-trace/1";
+
+/// Bytes gathered before they are written to the underlying writer.
+const CHUNK: usize = 64 * 1024;
+
+/// A [`TraceSink`] that writes the trace as JSON Lines.
+///
+/// It buffers internally (pass an unbuffered writer such as a `File` or a locked stdout). Write
+/// errors cannot be returned through [`TraceSink`]: the first one is kept, later output is
+/// dropped, and [`JsonlWriter::finish`] returns it.
+pub struct JsonlWriter<W: Write> {
+    out: W,
+    buf: Vec<u8>,
+    /// Per reported axis: its slot and the text before its value (`{"X":`, `,"Z":`).
+    axes: Vec<(usize, Box<[u8]>)>,
+    error: Option<io::Error>,
+    end: Option<EndReason>,
+}
+
+impl<W: Write> JsonlWriter<W> {
+    /// A writer into `out`.
+    pub fn new(out: W) -> Self {
+        JsonlWriter { out, buf: Vec::with_capacity(CHUNK + 4096), axes: Vec::new(), error: None, end: None }
+    }
+
+    /// The reason of the `end` event, once it has been written.
+    pub fn end_reason(&self) -> Option<&EndReason> {
+        self.end.as_ref()
+    }
+
+    /// Writes out what is buffered and returns the writer, or the first write error.
+    ///
+    /// # Errors
+    ///
+    /// The first error the underlying writer returned.
+    pub fn finish(mut self) -> io::Result<W> {
+        self.flush_buf();
+        if self.error.is_none() {
+            if let Err(e) = self.out.flush() {
+                self.error = Some(e);
+            }
+        }
+        match self.error.take() {
+            Some(e) => Err(e),
+            None => Ok(self.out),
+        }
+    }
+
+    /// Writes the meta line and takes the axis order from it.
+    pub fn write_meta(&mut self, meta: &TraceMeta) {
+        self.axes = meta
+            .axes
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                let mut key = Vec::with_capacity(8);
+                key.push(if i == 0 { b'{' } else { b',' });
+                push_json_char(&mut key, a.letter);
+                key.push(b':');
+                (a.index.min(AXES - 1), key.into_boxed_slice())
+            })
+            .collect();
+        let b = &mut self.buf;
+        b.extend_from_slice(b"{\"t_us\":0,\"kind\":\"meta\",\"dialect\":");
+        push_json_str(b, meta.dialect);
+        b.extend_from_slice(b",\"axes\":");
+        push_letter_list(b, meta.axes.iter());
+        b.extend_from_slice(b",\"diameter\":");
+        push_letter_list(b, meta.axes.iter().filter(|a| a.diameter));
+        b.extend_from_slice(b",\"period_us\":");
+        push_u64(b, meta.period_us);
+        b.extend_from_slice(b",\"sample_us\":");
+        push_u64(b, meta.sample_us);
+        b.extend_from_slice(b",\"format\":");
+        push_json_str(b, FORMAT);
+        b.extend_from_slice(b"}\n");
+        self.maybe_flush();
+    }
+
+    /// Writes one event line.
+    pub fn write_event(&mut self, ev: &TraceEvent) {
+        let b = &mut self.buf;
+        b.extend_from_slice(b"{\"t_us\":");
+        push_u64(b, ev.t_us);
+        b.extend_from_slice(b",\"kind\":\"");
+        match &ev.event {
+            Event::Sample(s) => {
+                b.extend_from_slice(b"sample\",\"axes\":");
+                push_axes(b, &self.axes, &s.axes);
+                b.extend_from_slice(b",\"spindle\":");
+                push_spindle(b, s);
+            }
+            Event::Signal { signal, value } => {
+                b.extend_from_slice(b"signal\",\"name\":");
+                push_json_str(b, signal.name());
+                b.extend_from_slice(b",\"value\":");
+                b.push(if *value { b'1' } else { b'0' });
+            }
+            Event::Block { line, text } => {
+                b.extend_from_slice(b"block\",\"line\":");
+                push_u64(b, u64::from(*line));
+                b.extend_from_slice(b",\"text\":");
+                push_json_str(b, text);
+            }
+            Event::Function { letter, code } => {
+                b.extend_from_slice(b"function\",\"letter\":");
+                push_json_char(b, *letter);
+                b.extend_from_slice(b",\"code\":");
+                push_u64(b, u64::from(*code));
+            }
+            Event::Alarm(a) => {
+                b.extend_from_slice(b"alarm\",");
+                push_alarm(b, a);
+            }
+            Event::Phase(p) => {
+                b.extend_from_slice(b"phase\",\"name\":");
+                push_json_str(b, p.name());
+            }
+            Event::Input { name, value } => {
+                b.extend_from_slice(b"input\",\"name\":");
+                push_json_str(b, name);
+                b.extend_from_slice(b",\"value\":");
+                push_json_str(b, value);
+            }
+            Event::End(s) => {
+                b.extend_from_slice(b"end\",");
+                push_end(b, &self.axes, s);
+                self.end = Some(s.reason.clone());
+            }
+        }
+        b.extend_from_slice(b"}\n");
+        self.maybe_flush();
+    }
+
+    fn maybe_flush(&mut self) {
+        if self.buf.len() >= CHUNK {
+            self.flush_buf();
+        }
+    }
+
+    fn flush_buf(&mut self) {
+        if self.error.is_none() && !self.buf.is_empty() {
+            if let Err(e) = self.out.write_all(&self.buf) {
+                self.error = Some(e);
+            }
+        }
+        self.buf.clear();
+    }
+}
+
+impl<W: Write> TraceSink for JsonlWriter<W> {
+    fn start(&mut self, meta: &TraceMeta) {
+        self.write_meta(meta);
+    }
+
+    fn event(&mut self, ev: &TraceEvent) {
+        self.write_event(ev);
+    }
+}
+
+fn push_letter_list<'a>(b: &mut Vec<u8>, axes: impl Iterator<Item = &'a AxisSpec>) {
+    b.push(b'[');
+    for (i, a) in axes.enumerate() {
+        if i > 0 {
+            b.push(b',');
+        }
+        push_json_char(b, a.letter);
+    }
+    b.push(b']');
+}
+
+/// `{"X":50,"Z":0}` in the meta's axis order (values in mm or degrees).
+fn push_axes(b: &mut Vec<u8>, keys: &[(usize, Box<[u8]>)], values: &[i64; AXES]) {
+    if keys.is_empty() {
+        b.extend_from_slice(b"{}");
+        return;
+    }
+    for (slot, key) in keys {
+        b.extend_from_slice(key);
+        push_fixed(b, values[*slot], 6);
+    }
+    b.push(b'}');
+}
+
+/// `{"rpm":1000,"angle_deg":12.5}`.
+fn push_spindle(b: &mut Vec<u8>, s: &Sample) {
+    b.extend_from_slice(b"{\"rpm\":");
+    push_fixed(b, s.spindle_mrpm, 3);
+    b.extend_from_slice(b",\"angle_deg\":");
+    push_fixed(b, s.spindle_mdeg, 3);
+    b.push(b'}');
+}
+
+/// `"code":"0204","message":"...","line":7,"col":3` (line and col only when known).
+fn push_alarm(b: &mut Vec<u8>, a: &Alarm) {
+    b.extend_from_slice(b"\"code\":");
+    push_json_str(b, a.kind.code());
+    b.extend_from_slice(b",\"message\":");
+    push_json_str(b, &a.message());
+    if let Some(line) = a.line {
+        b.extend_from_slice(b",\"line\":");
+        push_u64(b, u64::from(line));
+    }
+    if let Some(col) = a.col {
+        b.extend_from_slice(b",\"col\":");
+        push_u64(b, u64::from(col));
+    }
+}
+
+/// The body of the `end` line after its kind.
+fn push_end(b: &mut Vec<u8>, keys: &[(usize, Box<[u8]>)], s: &EndSummary) {
+    b.extend_from_slice(b"\"reason\":");
+    push_json_str(b, s.reason.name());
+    b.extend_from_slice(b",\"axes\":");
+    push_axes(b, keys, &s.state.axes);
+    b.extend_from_slice(b",\"command\":");
+    push_axes(b, keys, &s.command);
+    b.extend_from_slice(b",\"spindle\":");
+    push_spindle(b, &s.state);
+    b.extend_from_slice(b",\"signals\":");
+    push_signals(b, s.signals);
+    b.extend_from_slice(b",\"modal\":[");
+    for (i, m) in s.modal.iter().enumerate() {
+        if i > 0 {
+            b.push(b',');
+        }
+        push_json_str(b, m);
+    }
+    b.extend_from_slice(b"],\"alarms\":");
+    push_u64(b, u64::from(s.alarms));
+    b.extend_from_slice(b",\"blocks\":");
+    push_u64(b, u64::from(s.blocks));
+}
+
+/// `{"MF":0,"SF":0,...}`, every signal in [`Signal::ALL`] order.
+fn push_signals(b: &mut Vec<u8>, signals: Signals) {
+    b.push(b'{');
+    for (i, sig) in Signal::ALL.iter().enumerate() {
+        if i > 0 {
+            b.push(b',');
+        }
+        push_json_str(b, sig.name());
+        b.push(b':');
+        b.push(if signals.get(*sig) { b'1' } else { b'0' });
+    }
+    b.push(b'}');
+}
+
+/// Writes `v` in decimal.
+pub fn push_u64(b: &mut Vec<u8>, mut v: u64) {
+    let mut tmp = [0u8; 20];
+    let mut i = tmp.len();
+    loop {
+        i -= 1;
+        tmp[i] = b'0' + (v % 10) as u8;
+        v /= 10;
+        if v == 0 {
+            break;
+        }
+    }
+    b.extend_from_slice(&tmp[i..]);
+}
+
+/// Writes `v / 10^decimals` exactly, with no trailing zeros in the fraction and no fraction when
+/// it is zero (`1500000, 6` → `1.5`; `-50000000, 6` → `-50`). Same text as
+/// [`nc_engine::units::fixed_string`], without allocating.
+pub fn push_fixed(b: &mut Vec<u8>, v: i64, decimals: u32) {
+    let p = 10u64.pow(decimals);
+    let a = v.unsigned_abs();
+    if v < 0 {
+        b.push(b'-');
+    }
+    push_u64(b, a / p);
+    let mut frac = a % p;
+    if frac == 0 {
+        return;
+    }
+    let mut digits = decimals as usize;
+    while frac.is_multiple_of(10) {
+        frac /= 10;
+        digits -= 1;
+    }
+    b.push(b'.');
+    let mut tmp = [b'0'; 20];
+    let mut i = digits;
+    while frac > 0 {
+        i -= 1;
+        tmp[i] = b'0' + (frac % 10) as u8;
+        frac /= 10;
+    }
+    b.extend_from_slice(&tmp[..digits]);
+}
+
+/// Writes `s` as a JSON string (quotes, backslashes and control characters escaped; other
+/// characters as UTF-8).
+pub fn push_json_str(b: &mut Vec<u8>, s: &str) {
+    const HEX: &[u8; 16] = b"0123456789abcdef";
+    b.push(b'"');
+    let bytes = s.as_bytes();
+    let mut start = 0;
+    for (i, &c) in bytes.iter().enumerate() {
+        let esc: &[u8] = match c {
+            b'"' => b"\\\"",
+            b'\\' => b"\\\\",
+            b'\n' => b"\\n",
+            b'\r' => b"\\r",
+            b'\t' => b"\\t",
+            0x08 => b"\\b",
+            0x0c => b"\\f",
+            0..=0x1f | 0x7f => b"",
+            _ => continue,
+        };
+        b.extend_from_slice(&bytes[start..i]);
+        if esc.is_empty() {
+            b.extend_from_slice(b"\\u00");
+            b.push(HEX[(c >> 4) as usize]);
+            b.push(HEX[(c & 0xf) as usize]);
+        } else {
+            b.extend_from_slice(esc);
+        }
+        start = i + 1;
+    }
+    b.extend_from_slice(&bytes[start..]);
+    b.push(b'"');
+}
+
+fn push_json_char(b: &mut Vec<u8>, c: char) {
+    let mut tmp = [0u8; 4];
+    push_json_str(b, c.encode_utf8(&mut tmp));
+}
+
+#[cfg(test)]
+#[path = "jsonl_tests.rs"]
+mod tests;

@@ -1,0 +1,14 @@
+//! # nc-conform: the harness around the reference engine
+//!
+//! Runs G-code programs on [`nc_engine`] and writes what happened, for conformance tests,
+//! fault-injection runs and comparisons with recorded controller traces.
+//!
+//! - [`cli`]: the `nc-conform` command line;
+//! - [`jsonl`]: the JSON Lines trace writer (`docs/trace-format.md`);
+//! - [`params_yaml`]: parameter files (`docs/parameters-format.md`);
+//! - [`diag`]: input errors with their location, rendered with miette or as plain text.
+
+pub mod cli;
+pub mod diag;
+pub mod jsonl;
+pub mod params_yaml;
