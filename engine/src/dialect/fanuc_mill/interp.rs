@@ -361,7 +361,10 @@ impl FanucInterp {
                 continue;
             }
             match code {
-                0 | 1 => out.push(Step::Stop { optional: code == 1 }),
+                0 | 1 => {
+                    out.push(Step::Function { letter: 'M', code, effect: SpindleEffect::None });
+                    out.push(Step::Stop { optional: code == 1 });
+                }
                 2 | 30 => {
                     if self.rigid.take().is_some() {
                         out.push(Step::RigidExit { wait_rgtap: true });
@@ -369,6 +372,7 @@ impl FanucInterp {
                     self.m29_pending = false;
                     self.cycle = None;
                     self.data = CycleData::default();
+                    out.push(Step::Function { letter: 'M', code, effect: SpindleEffect::Stop });
                     out.push(Step::End);
                 }
                 _ => {}

@@ -121,7 +121,7 @@ fn seed_003_g84_two_holes_g99_then_g98() {
     assert_eq!(s[2], format!("[positioning] G0(60 28 12) G0(60 28 2) {} [idle]", body("28")));
     assert_eq!(s[3], format!("[positioning] G0(60 12 2) G0(60 12 2) {} G0(60 12 12) [idle]", body("12")));
     assert_eq!(s[4], "G0(60 12 12) G0(0 0 0) M5");
-    assert_eq!(s[5], "END");
+    assert_eq!(s[5], "M30 END");
     assert_eq!(it.modal()[6], "G80");
 }
 
@@ -307,7 +307,7 @@ fn a_group_01_code_cancels_the_cycle_but_keeps_its_data() {
     "G81 X10",
     "EXIT [positioning] G0(10 0 2) G0(10 0 2) [cutting] G1(10 0 -10)F100/min [retract] G0(10 0 2) [idle]"
 )]
-#[case::m30("M30", "EXIT END")]
+#[case::m30("M30", "EXIT M30 END")]
 #[case::plane_with_g80("G80 G18", "EXIT")]
 fn rigid_mode_ends(#[case] block: &str, #[case] want: &str) {
     let mut it = interp(&[]);
@@ -401,8 +401,8 @@ fn the_tool_axis_follows_the_plane() {
 
 #[test]
 fn block_order_s_t_m_motion_m05_m09_end() {
-    assert_eq!(story(&steps("X1 S100 T2 M09 M03 M30")), "S100 T2 M3 G0(1 0 0) M9 END");
-    assert_eq!(story(&steps("M01 M19 M00")), "M19 M01 M00");
+    assert_eq!(story(&steps("X1 S100 T2 M09 M03 M30")), "S100 T2 M3 G0(1 0 0) M9 M30 END");
+    assert_eq!(story(&steps("M01 M19 M00")), "M19 M1 M01 M0 M00");
     assert_eq!(story(&steps("M29 S300")), "S300 M29<300>");
     assert_eq!(story(&steps("S300\nM29\nS300 M08")), "S300 M29<300> M8");
     assert_eq!(story(&steps("M5 M123")), "M123 M5");

@@ -228,8 +228,10 @@ impl GskInterp {
                 self.m29_pending = true;
                 pre.push(Step::RigidEnter { code: 29, rpm });
             }
-            0 => post.push(Step::Stop { optional: false }),
-            1 => post.push(Step::Stop { optional: true }),
+            0 | 1 => {
+                post.push(f(code, SpindleEffect::None));
+                post.push(Step::Stop { optional: code == 1 });
+            }
             2 | 30 => {
                 let mut c = Vec::new();
                 self.cancel_rigid(&mut c);
