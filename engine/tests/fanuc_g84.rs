@@ -41,7 +41,7 @@ fn fan_cyc_seed_program_taps_two_holes_g99_then_g98() {
 fn fan_cyc_dwell_p_at_the_bottom_before_the_reversal() {
     let t = run_default("fanuc-mill", SEED_1);
     let dwell = t.phases().find(|p| p.1 == Phase::Dwell).unwrap().0;
-    let m05 = t.functions().filter(|f| f.2 == 5).next().unwrap().0;
+    let m05 = t.functions().find(|f| f.2 == 5).unwrap().0;
     assert_eq!(m05 - dwell, 300_000);
     assert_eq!(z_at(&t, dwell), -17 * MM);
 }
@@ -72,7 +72,8 @@ fn fan_rt_seed_peck_example(#[case] pcp: f64, #[case] cuts: usize, #[case] retra
         assert!(ends_of_returns.iter().all(|&z| z == retract_to), "{ends_of_returns:?}");
     } else {
         // High-speed: each retract is 1 mm (5213) above the depth reached.
-        assert_eq!(ends_of_returns[0], 5 * MM - 5 * MM + MM);
+        // R5 - Q5 = 0 reached, then 1 mm back up.
+        assert_eq!(ends_of_returns[0], MM);
     }
     assert_eq!(t.samples().map(|(_, s)| s.axes[2]).min().unwrap(), -40 * MM);
     assert_eq!(t.end().unwrap().state.axes[2], 50 * MM, "G98 default: initial level");
