@@ -107,3 +107,34 @@ fn gsk_rt_rtori_orients_the_spindle_before_the_first_hole() {
     let s = o.samples().find(|(ts, _)| *ts == cut).unwrap().1;
     assert_eq!(s.spindle_mdeg, 0, "at the reference angle");
 }
+
+#[test]
+fn com_plc_zero_speed_rises_when_the_spindle_has_stopped_unless_withheld() {
+    // 1000 rpm, ramp 1000 ms per 6000 rpm: stopping takes 166.7 ms after M05.
+    let text = "S1000 M3;\nG4 P2000;\nM5;\nG4 P1000;\nM30;\n";
+    let t = run("gsk-lathe", &[], text, &RunOptions::default());
+    let m5 = t.functions().find(|f| f.2 == 5).unwrap().0;
+    let rise = t.edges(Signal::Zsp).filter(|e| e.1).nth(1).unwrap().0;
+    assert_eq!(rise - m5, 166_667);
+    let inputs =
+        InputSchedule::default().at(0, Input::PlcAnswer { answer: PlcAnswer::ZeroSpeed, extra_us: None });
+    let t = run("gsk-lathe", &[], text, &with(inputs));
+    assert_eq!(t.edges(Signal::Zsp).filter(|e| e.1).count(), 1, "only the power-on state");
+}
+
+#[test]
+fn com_time_a_sample_shows_the_state_before_the_events_at_its_time() {
+    let t = run("gsk-lathe", &[], TAP, &RunOptions::default());
+    let mut last_t = None;
+    for e in &t.events {
+        if last_t != Some(e.t_us) && e.t_us % 1000 == 0 && !matches!(e.event, nc_engine::Event::End(_)) {
+            assert!(
+                matches!(e.event, nc_engine::Event::Sample(_)),
+                "first event at {} is {:?}",
+                e.t_us,
+                e.event
+            );
+        }
+        last_t = Some(e.t_us);
+    }
+}

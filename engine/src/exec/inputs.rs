@@ -37,6 +37,11 @@ impl Exec<'_> {
                     self.raise(Alarm::new(AlarmKind::FinTimeout, "the PLC did not answer FIN"));
                 }
             }
+            PlcAction::ZeroSpeed => {
+                if self.spindle_at(self.now).1 == 0.0 {
+                    self.set_signal(Signal::Zsp, true);
+                }
+            }
             PlcAction::StallTimer => {
                 if self.spindle.stalled
                     && self.motion.as_ref().is_some_and(|m| matches!(m.path, Path::Tap { .. }))
@@ -96,6 +101,7 @@ impl Exec<'_> {
                 if !b {
                     self.spindle.command(self.now, target);
                 }
+                self.spindle_changed();
             }
             Input::SetParam { .. } => {}
         }
@@ -160,6 +166,7 @@ impl Exec<'_> {
         if let Some(rpm) = self.pre_rigid_rpm.take() {
             self.spindle.position_mode = false;
             self.spindle.command(self.now, rpm);
+            self.spindle_changed();
         }
         self.hold_suppressed = false;
         self.overload = None;

@@ -171,6 +171,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
 impl Exec<'_> {
     fn main_loop(&mut self) {
         self.set_signal(Signal::Stl, true);
+        self.set_signal(Signal::Zsp, true);
         while self.finished.is_none() {
             // Inputs due now act before the next step starts (COM-INP-01).
             if self.inputs.get(self.next_input).is_some_and(|(t, _)| *t <= self.now) {
@@ -287,6 +288,10 @@ impl Exec<'_> {
 
     /// Emits an event at the present time.
     fn emit(&mut self, event: Event) {
+        // A sample at t shows the state before the events at t (COM-TIME-04).
+        if self.opts.sample_us > 0 && self.next_sample <= self.now {
+            self.advance_to(self.now);
+        }
         self.sink.event(&TraceEvent { t_us: self.now, event });
     }
 
@@ -295,6 +300,25 @@ impl Exec<'_> {
         if self.signals.get(s) != v {
             self.signals.set(s, v);
             self.emit(Event::Signal { signal: s, value: v });
+        }
+    }
+
+    /// The drive's zero-speed signal after a change of the spindle's command: it falls as the
+    /// spindle starts and rises when a ramp to a stop has ended (unless withheld by a fault).
+    fn spindle_changed(&mut self) {
+        let (_, rpm) = self.spindle_at(self.now);
+        let moving = rpm != 0.0 || (self.spindle.target != 0.0 && !self.spindle.stalled);
+        if moving {
+            self.set_signal(Signal::Zsp, false);
+        }
+        if self.spindle.target == 0.0 {
+            let t = self.spindle.ramp_end().max(self.now);
+            self.plc.answer(
+                self.now,
+                t - self.now,
+                crate::input::PlcAnswer::ZeroSpeed,
+                plc::PlcAction::ZeroSpeed,
+            );
         }
     }
 

@@ -89,55 +89,13 @@ impl Motion {
         self.t0 + self.duration()
     }
 
-    /// Command positions at `t`.
+    /// Command positions at `t` (the target once the motion has ended).
     pub fn pos(&self, t: Micros) -> Pos {
-        let dt = t.saturating_sub(self.t0);
-        let mut p = self.start;
-        match &self.path {
-            Path::Rapid { profiles, backlash } => {
-                for i in 0..AXES {
-                    let d = self.target[i] - self.start[i];
-                    if d != 0 {
-                        let s = (profiles[i].eval(dt).0 - backlash[i]).max(0.0);
-                        p[i] = self.start[i] + (d.signum() as f64 * s).round() as Nm;
-                    }
-                }
-            }
-            Path::Line { profile, len } => {
-                let f = if *len > 0.0 { profile.eval(dt).0 / len } else { 1.0 };
-                for i in 0..AXES {
-                    p[i] = self.start[i] + ((self.target[i] - self.start[i]) as f64 * f).round() as Nm;
-                }
-            }
-            Path::Arc { profile, len, center, radius, radius_end, a0, sweep, plane } => {
-                let f = if *len > 0.0 { profile.eval(dt).0 / len } else { 1.0 };
-                let (i0, i1, _) = plane.axes();
-                for i in 0..AXES {
-                    p[i] = self.start[i] + ((self.target[i] - self.start[i]) as f64 * f).round() as Nm;
-                }
-                if f < 1.0 {
-                    let a = a0 + sweep * f;
-                    let r = radius + (radius_end - radius) * f;
-                    p[i0] = (center[0] + r * libm::cos(a)).round() as Nm;
-                    p[i1] = (center[1] + r * libm::sin(a)).round() as Nm;
-                } else {
-                    p[i0] = self.target[i0];
-                    p[i1] = self.target[i1];
-                }
-            }
-            Path::Tap { profile, axis, backlash, .. } => {
-                let d = self.target[*axis] - self.start[*axis];
-                let s = (profile.eval(dt).0 - backlash).max(0.0);
-                p[*axis] = self.start[*axis] + (d.signum() as f64 * s).round() as Nm;
-                if dt >= profile.total {
-                    p[*axis] = self.target[*axis];
-                }
-            }
+        if t.saturating_sub(self.t0) >= self.duration() {
+            self.target
+        } else {
+            self.pos_unclamped(t)
         }
-        if dt >= self.duration() {
-            p = self.target;
-        }
-        p
     }
 
     /// For a tapping stroke: the spindle's turned angle (deg, signed) and speed (rpm, signed) at `t`.
@@ -184,10 +142,9 @@ impl Motion {
         self.target = stop;
     }
 
+    /// Positions from the profile alone (also past its end: where a stopped motion comes to rest).
     fn pos_unclamped(&self, t: Micros) -> Pos {
-        let saved = self.target;
-        let mut m = self.clone();
-        m.target = saved;
+        let m = self;
         let dt = t.saturating_sub(m.t0);
         let mut p = m.start;
         match &m.path {

@@ -21,6 +21,8 @@ pub enum PlcAction {
     FinTimer(u64),
     /// The stalled-spindle timer ran out.
     StallTimer,
+    /// The spindle's ramp to a stop ends: the drive reports zero speed if it is still stopped.
+    ZeroSpeed,
 }
 
 /// The ladder's pending actions and injected faults.

@@ -80,6 +80,7 @@ impl Exec<'_> {
                 self.s_cmd = rpm;
                 self.spindle.command(now, 0.0);
                 self.spindle.position_mode = true;
+                self.spindle_changed();
                 self.set_signal(Signal::Mf, true);
                 self.set_signal(Signal::Rtap, true);
                 self.plc.rigid_strobe(now);
@@ -244,6 +245,9 @@ impl Exec<'_> {
         let (angle, _) = self.spindle.at(now);
         self.spindle.hold(now, angle);
         self.set_signal(if t.spindle_forward { Signal::Rgspp } else { Signal::Rgspm }, true);
+        if !self.spindle.stalled && !self.machine_lock {
+            self.set_signal(Signal::Zsp, false);
+        }
         let mut target = self.cmd;
         target[t.axis] = t.target;
         self.start_motion(target, Path::Tap { profile, axis: t.axis, backlash: b, lead, spin });
@@ -272,6 +276,12 @@ impl Exec<'_> {
             self.spindle.hold(end, angle);
             self.set_signal(Signal::Rgspp, false);
             self.set_signal(Signal::Rgspm, false);
+            self.plc.answer(
+                self.now,
+                0,
+                crate::input::PlcAnswer::ZeroSpeed,
+                super::plc::PlcAction::ZeroSpeed,
+            );
         }
         if self.machine_lock {
             for i in 0..AXES {
@@ -309,6 +319,9 @@ impl Exec<'_> {
                     self.spindle.command(now, s * rpm.signum());
                 }
             }
+        }
+        if effect != SpindleEffect::None {
+            self.spindle_changed();
         }
         self.set_signal(strobe, true);
         self.plc.strobe(now);
