@@ -172,22 +172,7 @@ impl Exec<'_> {
         self.overload = None;
         self.interp.reset(self.cmd);
         self.set_phase(Phase::Idle);
-        // Let the ladder finish dropping RGTAP, then end.
-        self.flush_plc_after_reset();
         self.finish(EndReason::Reset);
-    }
-
-    fn flush_plc_after_reset(&mut self) {
-        while let Some(t) = self.plc.next_time() {
-            self.advance_to(t);
-            if let Some(PlcAction::Set(sig, v)) = self.plc.pop_due(t) {
-                {
-                    self.set_signal(sig, v);
-                    let rtap = self.signals.get(Signal::Rtap);
-                    self.plc.react(self.now, sig, v, rtap);
-                }
-            }
-        }
     }
 
     /// Starts or stops the overload timer after a change of current or watch.

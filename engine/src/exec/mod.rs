@@ -343,6 +343,29 @@ impl Exec<'_> {
         self.finish(EndReason::Alarm);
     }
 
+    /// After the end: the ladder and the drive finish what they were answering (FIN falls, RGTAP
+    /// and the position mode drop, zero speed comes); their timers no longer matter.
+    fn settle(&mut self) {
+        while let Some(t) = self.plc.next_time() {
+            match self.plc.pop_due(t) {
+                Some(plc::PlcAction::Set(sig, v)) => {
+                    self.advance_to(t);
+                    self.set_signal(sig, v);
+                    let rtap = self.signals.get(Signal::Rtap);
+                    self.plc.react(self.now, sig, v, rtap);
+                }
+                Some(plc::PlcAction::ZeroSpeed) => {
+                    self.advance_to(t);
+                    if self.spindle_at(t).1 == 0.0 {
+                        self.set_signal(Signal::Zsp, true);
+                    }
+                }
+                Some(_) => {}
+                None => break,
+            }
+        }
+    }
+
     /// Machine positions (physical) at `t`.
     fn machine_pos(&self, t: Micros) -> Pos {
         let cmd = self.command_pos(t);
@@ -397,6 +420,9 @@ impl Exec<'_> {
             return;
         }
         self.finished = Some(reason.clone());
+        if matches!(reason, EndReason::ProgramEnd | EndReason::Reset | EndReason::Alarm) {
+            self.settle();
+        }
         let state = self.sample_at(self.now);
         let mut command = self.command_pos(self.now);
         if self.diameter_x {
