@@ -266,18 +266,8 @@ fn push_signals(b: &mut Vec<u8>, signals: Signals) {
 }
 
 /// Writes `v` in decimal.
-pub fn push_u64(b: &mut Vec<u8>, mut v: u64) {
-    let mut tmp = [0u8; 20];
-    let mut i = tmp.len();
-    loop {
-        i -= 1;
-        tmp[i] = b'0' + (v % 10) as u8;
-        v /= 10;
-        if v == 0 {
-            break;
-        }
-    }
-    b.extend_from_slice(&tmp[i..]);
+pub fn push_u64(b: &mut Vec<u8>, v: u64) {
+    b.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
 }
 
 /// Writes `v / 10^decimals` exactly, with no trailing zeros in the fraction and no fraction when
@@ -300,14 +290,11 @@ pub fn push_fixed(b: &mut Vec<u8>, v: i64, decimals: u32) {
         digits -= 1;
     }
     b.push(b'.');
-    let mut tmp = [b'0'; 20];
-    let mut i = digits;
-    while frac > 0 {
-        i -= 1;
-        tmp[i] = b'0' + (frac % 10) as u8;
-        frac /= 10;
-    }
-    b.extend_from_slice(&tmp[..digits]);
+    // Leading zeros of the fraction, then its significant digits.
+    let mut buf = itoa::Buffer::new();
+    let text = buf.format(frac).as_bytes();
+    b.extend(std::iter::repeat_n(b'0', digits - text.len()));
+    b.extend_from_slice(text);
 }
 
 /// Writes `s` as a JSON string (quotes, backslashes and control characters escaped; other
