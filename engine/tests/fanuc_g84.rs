@@ -144,3 +144,27 @@ fn fan_rt_feed_hold_waits_until_the_return_is_complete() {
     assert!(spl >= back, "held at {spl}, return ended at {back}");
     assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd);
 }
+
+#[test]
+fn fan_rt_conventional_tapping_ignores_feed_override_and_dry_run() {
+    let text = "G90 G0 X0 Y0 Z10 S500 M3\nG84 Z-10 R2 F500\nG80\nM30\n";
+    let plain = run_default("fanuc-mill", text);
+    let inputs = nc_engine::InputSchedule::default()
+        .at(0, nc_engine::Input::FeedOverride(50))
+        .at(0, nc_engine::Input::DryRun(true));
+    let t = run("fanuc-mill", &[], text, &RunOptions { inputs, ..RunOptions::default() });
+    let cut = |t: &Trace| {
+        let c = t.phases().find(|p| p.1 == Phase::Cutting).unwrap().0;
+        let r = t.phases().find(|p| p.1 == Phase::Retract).unwrap().0;
+        r - c
+    };
+    assert_eq!(cut(&t), cut(&plain));
+}
+
+#[test]
+fn fan_lex_tool_change_takes_the_tool_change_time() {
+    let t = run("fanuc-mill", &[("nc.tool_change_ms", None, 3000.0)], "T2 M6\nM30\n", &RunOptions::default());
+    let m6 = t.functions().find(|f| f.2 == 6).unwrap().0;
+    let fin = t.edges(Signal::Fin).filter(|e| e.1).map(|e| e.0).find(|&ts| ts > m6).unwrap();
+    assert_eq!(fin - m6, 3_000_000);
+}

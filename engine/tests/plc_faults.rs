@@ -61,12 +61,13 @@ fn com_plc_rgtap_never_comes_leaves_m29_waiting_until_the_fin_timer() {
 }
 
 #[test]
-fn com_inp_spindle_stall_during_rigid_tapping_raises_5074() {
+fn com_inp_spindle_stalled_before_the_stroke_trips_the_excess_error() {
+    // Stalled from the start at 1000 rpm: the axis runs 1 mm ahead within the 100 ms PLC timer.
     let inputs = InputSchedule::default().at(0, Input::SpindleStall(true));
     let t = run("gsk-lathe", &[], TAP, &with(inputs));
-    assert_eq!(alarm_codes(&t), ["5074"]);
+    assert_eq!(alarm_codes(&t), ["0411"]);
     let cut = t.edges(Signal::Rgspp).next().unwrap().0;
-    assert_eq!(t.alarms().next().unwrap().0 - cut, 100_000);
+    assert!(t.alarms().next().unwrap().0 - cut < 100_000);
 }
 
 #[test]
@@ -137,4 +138,35 @@ fn com_time_a_sample_shows_the_state_before_the_events_at_its_time() {
         }
         last_t = Some(e.t_us);
     }
+}
+
+#[test]
+fn com_inp_a_stall_during_a_stroke_freezes_the_spindle_and_trips_the_excess_error() {
+    // Stall at 0.6 s, mid-cut (1000 rpm × 1 mm = 16.7 mm/s): the axis runs 1 mm ahead in 60 ms.
+    let inputs = InputSchedule::default().at(600_000, Input::SpindleStall(true));
+    let t = run("gsk-lathe", &[], TAP, &with(inputs));
+    assert_eq!(alarm_codes(&t), ["0411"], "{}", support::events(&t));
+    let (at, _) = t.alarms().next().unwrap();
+    assert!((655_000..=670_000).contains(&at), "{at}");
+    let frozen: Vec<i64> = t.samples().filter(|(ts, _)| *ts > 600_000).map(|(_, s)| s.spindle_mdeg).collect();
+    assert!(frozen.windows(2).all(|w| w[0] == w[1]), "the stalled spindle's angle does not move");
+    assert!(t.samples().filter(|(ts, _)| *ts > 600_000).all(|(_, s)| s.spindle_mrpm == 0));
+}
+
+#[test]
+fn com_inp_a_slow_stall_is_caught_by_the_ladder_timer_first() {
+    // At 100 rpm the axis needs 600 ms to run 1 mm ahead: the 100 ms PLC timer (5074) comes first.
+    let slow = "G98;\nG0 X50 Z0;\nM29 S100;\nG84 Z-10 F1;\nG80;\nM30;\n";
+    let inputs = InputSchedule::default().at(2_000_000, Input::SpindleStall(true));
+    let t = run("gsk-lathe", &[], slow, &with(inputs));
+    assert_eq!(alarm_codes(&t), ["5074"]);
+    assert_eq!(t.alarms().next().unwrap().0, 2_100_000);
+}
+
+#[test]
+fn gsk_rt_a_clamp_code_in_a_continuation_block_is_output_once_after_positioning() {
+    let text = "G98;\nG0 X50 Z0;\nM29 S1000;\nG84 Z-5 F1;\nC90 M68;\nG80;\nM30;\n";
+    let t = run("gsk-lathe", &[("170", None, 68.0)], text, &RunOptions::default());
+    let ms: Vec<u32> = t.functions().filter(|f| f.1 == 'M').map(|f| f.2).collect();
+    assert_eq!(ms, [29, 68, 69, 30]);
 }

@@ -36,6 +36,7 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         hold_in_rigid_tap: false,
         orient_us: ms("nc.orient_ms"),
         excess_error_nm: 1_000_000,
+        tool_change_us: 0,
         plc: PlcConfig {
             fin_us: ms("plc.fin_ms"),
             fin_fall_us: ms("plc.fin_fall_ms"),

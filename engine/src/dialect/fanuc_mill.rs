@@ -85,6 +85,7 @@ impl Dialect for FanucMill {
         c.rigid_max_rpm = p.get("5241") as u32;
         c.rigid_ramp_us = (p.get("5261") * 1000.0) as u64;
         c.hold_in_rigid_tap = p.bit("5200.6");
+        c.tool_change_us = (p.get("nc.tool_change_ms") * 1000.0) as u64;
         c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {

@@ -56,6 +56,8 @@ pub struct PlantConfig {
     pub hold_in_rigid_tap: bool,
     /// Spindle orientation (reference return) time, µs.
     pub orient_us: Micros,
+    /// M06 strobe to FIN (the tool change), µs; 0: the ordinary FIN delay.
+    pub tool_change_us: Micros,
     /// Servo excess error limit for the tap axis while moving, nm (alarm 0411).
     pub excess_error_nm: Nm,
     /// The PLC ladder.

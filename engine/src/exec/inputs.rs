@@ -42,6 +42,14 @@ impl Exec<'_> {
                     self.set_signal(Signal::Zsp, true);
                 }
             }
+            PlcAction::ExcessError => {
+                if self.stall_angle.is_some() && self.spindle.stalled {
+                    self.raise(Alarm::new(
+                        AlarmKind::ExcessErrorMoving,
+                        "the tap axis ran ahead of the stalled spindle",
+                    ));
+                }
+            }
             PlcAction::StallTimer => {
                 if self.spindle.stalled
                     && self.motion.as_ref().is_some_and(|m| matches!(m.path, Path::Tap { .. }))
@@ -100,6 +108,9 @@ impl Exec<'_> {
                 self.spindle.stalled = b;
                 if !b {
                     self.spindle.command(self.now, target);
+                }
+                if b && self.stall_angle.is_none() {
+                    self.stall_checks();
                 }
                 self.spindle_changed();
             }

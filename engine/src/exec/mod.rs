@@ -102,6 +102,8 @@ pub(crate) struct Exec<'a> {
     finished: Option<EndReason>,
     /// A block has been read and its steps not yet all taken (single block stops after it).
     in_block: bool,
+    /// The spindle stalled during the present tapping stroke: its angle then.
+    stall_angle: Option<f64>,
     /// Source line of the block being executed (located alarms raised while executing it).
     cur_line: Option<u32>,
     /// Feed hold asked for: stop before the next step.
@@ -162,6 +164,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         finished: None,
         in_block: false,
         cur_line: None,
+        stall_angle: None,
         hold_requested: false,
         motion_step: None,
     };
@@ -397,6 +400,9 @@ impl Exec<'_> {
             if let Some((da, rpm)) = m.spindle(t) {
                 if self.machine_lock {
                     return (self.spindle.angle0, 0.0);
+                }
+                if let Some(a) = self.stall_angle {
+                    return (a, 0.0);
                 }
                 return (self.spindle.angle0 + da, rpm);
             }

@@ -21,6 +21,8 @@ pub enum PlcAction {
     FinTimer(u64),
     /// The stalled-spindle timer ran out.
     StallTimer,
+    /// The tap axis ran ahead of a stalled spindle by the excess-error limit.
+    ExcessError,
     /// The spindle's ramp to a stop ends: the drive reports zero speed if it is still stopped.
     ZeroSpeed,
 }
@@ -92,10 +94,10 @@ impl Plc {
     }
 
     /// The CNC raised an M/S/T strobe.
-    pub fn strobe(&mut self, now: Micros) {
+    pub fn strobe(&mut self, now: Micros, fin_us: Micros) {
         self.strobe_no += 1;
         let n = self.strobe_no;
-        self.answer(now, self.cfg.fin_us, PlcAnswer::Fin, PlcAction::Set(Signal::Fin, true));
+        self.answer(now, fin_us, PlcAnswer::Fin, PlcAction::Set(Signal::Fin, true));
         self.at(now + self.cfg.fin_timeout_us, PlcAction::FinTimer(n));
     }
 

@@ -6,7 +6,7 @@ use super::{Active, AfterAwait, Exec};
 use crate::alarm::{Alarm, AlarmKind};
 use crate::plan::{Feed, Plane, Pos, SpindleEffect, Step, TapMove};
 use crate::trace::{EndReason, Event, Signal, AXES};
-use crate::units::ceil_to;
+use crate::units::{ceil_to, Micros};
 
 impl Exec<'_> {
     /// Takes the next step (reading the next block when the queue is empty) and starts it.
@@ -158,9 +158,12 @@ impl Exec<'_> {
             self.raise(Alarm::new(AlarmKind::FeedZero, "feed per revolution with the spindle stopped"));
             return None;
         }
-        let mut v = nm_per_min * self.feed_override as f64 / 100.0;
-        if self.dry_run {
-            v = self.cfg.dry_run_nm_min * self.feed_override as f64 / 100.0;
+        // In a tapping cycle (hold suppressed) feed override and dry run do not act (COM-MOT-07).
+        let tapping = self.hold_suppressed;
+        let ovr = if tapping { 100.0 } else { self.feed_override as f64 };
+        let mut v = nm_per_min * ovr / 100.0;
+        if self.dry_run && !tapping {
+            v = self.cfg.dry_run_nm_min * ovr / 100.0;
         }
         Some(v.min(self.cfg.feed_max_nm_min) / 60e6)
     }
@@ -250,11 +253,38 @@ impl Exec<'_> {
         }
         let mut target = self.cmd;
         target[t.axis] = t.target;
+        self.stall_angle = None;
         self.start_motion(target, Path::Tap { profile, axis: t.axis, backlash: b, lead, spin });
         if self.spindle.stalled {
-            let alarm_at = now + self.cfg.plc.spindle_stall_us;
-            self.plc.at(alarm_at, super::plc::PlcAction::StallTimer);
+            self.stall_checks();
         }
+    }
+
+    /// The spindle is stalled during a tapping stroke: its angle freezes while the tap axis goes on
+    /// (COM-INP-09). The servo's excess error trips when the axis has run the limit ahead (0411);
+    /// the ladder's stall timer raises 5074 — whichever comes first.
+    pub(super) fn stall_checks(&mut self) {
+        let now = self.now;
+        let Some(m) = &self.motion else { return };
+        let Path::Tap { axis, .. } = m.path else { return };
+        self.stall_angle = Some(self.spindle_at(now).0);
+        let p0 = m.pos(now)[axis];
+        let limit = self.cfg.excess_error_nm;
+        let ahead = |t: Micros| (m.pos(t)[axis] - p0).abs() >= limit;
+        let end = m.end();
+        if ahead(end) {
+            let (mut lo, mut hi) = (now, end);
+            while hi - lo > 1 {
+                let mid = lo + (hi - lo) / 2;
+                if ahead(mid) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            self.plc.at(hi, super::plc::PlcAction::ExcessError);
+        }
+        self.plc.at(now + self.cfg.plc.spindle_stall_us, super::plc::PlcAction::StallTimer);
     }
 
     fn start_motion(&mut self, target: Pos, path: Path) {
@@ -272,7 +302,11 @@ impl Exec<'_> {
         let Some(m) = self.motion.take() else { return };
         let end = m.end();
         if let Some((da, _)) = m.spindle(end) {
-            let angle = if self.machine_lock { self.spindle.angle0 } else { self.spindle.angle0 + da };
+            let angle = match self.stall_angle.take() {
+                Some(a) => a,
+                None if self.machine_lock => self.spindle.angle0,
+                None => self.spindle.angle0 + da,
+            };
             self.spindle.hold(end, angle);
             self.set_signal(Signal::Rgspp, false);
             self.set_signal(Signal::Rgspm, false);
@@ -324,7 +358,12 @@ impl Exec<'_> {
             self.spindle_changed();
         }
         self.set_signal(strobe, true);
-        self.plc.strobe(now);
+        let fin = if letter == 'M' && code == 6 && self.cfg.tool_change_us > 0 {
+            self.cfg.tool_change_us
+        } else {
+            self.cfg.plc.fin_us
+        };
+        self.plc.strobe(now, fin);
         self.active = Active::Await { signal: Signal::Fin, value: true, then: AfterAwait::EndStrobe(strobe) };
         self.check_await();
     }

@@ -478,7 +478,10 @@ impl Interpreter for GskInterp {
         let mut pre = Vec::new();
         let mut body = Vec::new();
         let mut post = Vec::new();
-        let cycle_m_ok = w.g.iter().any(|(g, _)| *g == 840 || *g == 880);
+        // The clamp code is a cycle word in a tapping block and in a block that continues the cycle.
+        let in_cycle = self.motion == 840 || self.motion == 880;
+        let cancels = w.g.iter().any(|(g, _)| matches!(g, 0 | 10 | 20 | 30 | 800));
+        let cycle_m_ok = w.g.iter().any(|(g, _)| *g == 840 || *g == 880) || (in_cycle && !cancels);
         // One M code per block; in a tapping block M29 and the clamp code can't share it (GSK-RT-13).
         if w.m.len() > 1 {
             let has29 = w.m.iter().any(|(c, _)| *c == 29);
