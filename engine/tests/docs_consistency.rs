@@ -1,0 +1,131 @@
+//! The docs are part of the contract: every parameter and alarm is documented, and every rule id
+//! that a test cites is defined in `docs/rules/`.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn read_dir_text(dir: &Path, ext: &str) -> Vec<(PathBuf, String)> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(read_dir_text(&p, ext));
+        } else if p.extension().is_some_and(|x| x == ext) {
+            out.push((p.clone(), std::fs::read_to_string(&p).unwrap()));
+        }
+    }
+    out
+}
+
+/// Rule ids like `GSK-RT-07` in a text (families COM, GSK, FAN).
+fn rule_ids(text: &str) -> BTreeSet<String> {
+    let mut ids = BTreeSet::new();
+    let b = text.as_bytes();
+    for fam in ["COM-", "GSK-", "FAN-"] {
+        let mut from = 0;
+        while let Some(i) = text[from..].find(fam) {
+            let start = from + i;
+            let mut end = start + fam.len();
+            while end < b.len() && b[end].is_ascii_uppercase() {
+                end += 1;
+            }
+            if end < b.len() && b[end] == b'-' {
+                let mut d = end + 1;
+                while d < b.len() && b[d].is_ascii_digit() {
+                    d += 1;
+                }
+                if d - end - 1 == 2 {
+                    ids.insert(text[start..d].to_string());
+                }
+            }
+            from = start + fam.len();
+        }
+    }
+    ids
+}
+
+#[test]
+fn every_rule_id_cited_by_a_test_is_defined() {
+    let defined: BTreeSet<String> = read_dir_text(&root().join("docs/rules"), "md")
+        .iter()
+        .flat_map(|(_, t)| t.lines().filter(|l| l.starts_with("**")).flat_map(rule_ids).collect::<Vec<_>>())
+        .collect();
+    assert!(defined.len() > 100, "{} rules", defined.len());
+    let mut missing = Vec::new();
+    for dir in ["engine/tests", "engine/src", "harness"] {
+        for (p, text) in read_dir_text(&root().join(dir), "rs") {
+            for id in rule_ids(&text) {
+                if !defined.contains(&id) {
+                    missing.push(format!("{} cites {id}", p.display()));
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "undefined rule ids:\n{}", missing.join("\n"));
+}
+
+#[test]
+fn every_parameter_is_documented() {
+    let doc = std::fs::read_to_string(root().join("docs/parameters.md")).unwrap();
+    for d in nc_engine::dialect::ALL {
+        for p in d.param_table() {
+            assert!(
+                doc.contains(&format!("`{}`", p.id)),
+                "{} parameter {} is not in docs/parameters.md",
+                d.name(),
+                p.id
+            );
+        }
+    }
+}
+
+#[test]
+fn every_alarm_is_documented() {
+    use nc_engine::AlarmKind::*;
+    let doc = std::fs::read_to_string(root().join("docs/alarms.md")).unwrap();
+    let all = [
+        ImproperGCode,
+        FeedZero,
+        IllegalSCode,
+        FeedNotFoundRigid,
+        PositionLsiOverflow,
+        ProgramMissRigid,
+        IllegalAxisOperation,
+        RigidModeDiOff,
+        CannotChangePlane,
+        RigidDataMismatch,
+        ExcessErrorStopped,
+        ExcessErrorMoving,
+        M29FeedbackTimeout,
+        SpindleNotRotating,
+        WordOutOfRange,
+        WordMissing,
+        UnsupportedGCode,
+        NotModelled,
+        IllegalWord,
+        M29Repeated,
+        AxisMoveAfterM29,
+        ClampCodeMismatch,
+        TapAxisChangedWithoutBottom,
+        M29SharesBlock,
+        RigidSignalOff,
+        TooManyMCodes,
+        SpindleNotTurning,
+        FinTimeout,
+        EmergencyStop,
+        OverloadRetract,
+        ParameterOutOfRange,
+    ];
+    for k in all {
+        assert!(
+            doc.contains(k.code()) && doc.contains(k.title()),
+            "{} {} missing from docs/alarms.md",
+            k.code(),
+            k.title()
+        );
+    }
+}
