@@ -2,7 +2,8 @@
 //! acts on the machine. A scenario, a property test, a fuzzer and a vendor adapter all build an
 //! [`InputSchedule`]; the executor consults it and applies each input at its exact time.
 
-use crate::units::Micros;
+use crate::trace::{Phase, Signal};
+use crate::units::{Micros, Nm};
 
 /// Which motor's current the overload watch reads (parameter 186 bit 5 on GSK).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -136,11 +137,61 @@ impl Input {
     }
 }
 
+/// Something that happens during a run, by which inputs and checks are timed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Condition {
+    /// A signal has this value.
+    Signal {
+        /// Which signal.
+        signal: Signal,
+        /// 1 or 0.
+        value: bool,
+    },
+    /// An axis' command position is strictly below this (nm, reported units: diameter for a
+    /// lathe's X).
+    AxisBelow {
+        /// Axis slot.
+        axis: usize,
+        /// Threshold.
+        nm: Nm,
+    },
+    /// An axis' command position is strictly above this.
+    AxisAbove {
+        /// Axis slot.
+        axis: usize,
+        /// Threshold.
+        nm: Nm,
+    },
+    /// The block on this source line starts.
+    Block {
+        /// 1-based line.
+        line: u32,
+    },
+    /// The phase is entered.
+    Phase(Phase),
+    /// An M/S/T function is output.
+    Function {
+        /// `M`, `S`, `T`.
+        letter: char,
+        /// Its number.
+        code: u32,
+    },
+}
+
 /// When an input acts.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Trigger {
     /// At this time.
     At(Micros),
+    /// `delay` after the `occurrence`-th time (1 = first) `condition` begins to hold.
+    When {
+        /// The condition.
+        condition: Condition,
+        /// Which occurrence, from 1.
+        occurrence: u32,
+        /// Delay after it, µs.
+        delay_us: Micros,
+    },
 }
 
 /// An input with its trigger.
@@ -166,16 +217,37 @@ impl InputSchedule {
         self
     }
 
+    /// Adds an input on a condition.
+    pub fn when(mut self, condition: Condition, occurrence: u32, delay_us: Micros, input: Input) -> Self {
+        self.inputs
+            .push(ScheduledInput { trigger: Trigger::When { condition, occurrence, delay_us }, input });
+        self
+    }
+
     /// The timed inputs sorted by time (stable: same-time inputs keep their order).
     pub fn timed(&self) -> Vec<(Micros, Input)> {
         let mut v: Vec<(Micros, Input)> = self
             .inputs
             .iter()
-            .map(|s| match s.trigger {
-                Trigger::At(t) => (t, s.input.clone()),
+            .filter_map(|s| match s.trigger {
+                Trigger::At(t) => Some((t, s.input.clone())),
+                Trigger::When { .. } => None,
             })
             .collect();
         v.sort_by_key(|(t, _)| *t);
         v
+    }
+
+    /// The inputs on conditions, in the order given.
+    pub fn conditional(&self) -> Vec<(Condition, u32, Micros, Input)> {
+        self.inputs
+            .iter()
+            .filter_map(|s| match &s.trigger {
+                Trigger::When { condition, occurrence, delay_us } => {
+                    Some((condition.clone(), *occurrence, *delay_us, s.input.clone()))
+                }
+                Trigger::At(_) => None,
+            })
+            .collect()
     }
 }

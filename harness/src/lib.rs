@@ -12,3 +12,4 @@ pub mod cli;
 pub mod diag;
 pub mod jsonl;
 pub mod params_yaml;
+pub mod scenario;

@@ -77,8 +77,17 @@ pub fn parse(text: &str) -> Result<Vec<Setting>, ParamsFileError> {
     // YAML 1.2 booleans only: `Y` and `N` are axis letters, not yes and no.
     let options = serde_saphyr::options! { strict_booleans: true, with_snippet: false };
     let file: File = serde_saphyr::from_str_with_options(text, options).map_err(|e| yaml_error(text, &e))?;
+    settings_from(text, file.params.unwrap_or_default())
+}
+
+/// The settings of a `params` mapping read as part of a larger YAML file (`text` is that file).
+///
+/// # Errors
+///
+/// An axis key that is not one letter.
+pub fn settings_from(text: &str, entries: ParamEntries) -> Result<Vec<Setting>, ParamsFileError> {
     let mut out = Vec::new();
-    for (key, value) in file.params.map(|p| p.0).unwrap_or_default() {
+    for (key, value) in entries.0 {
         let id_span = span_of(text, &key.referenced);
         let id = key.value.written(text, id_span);
         match value.value {
@@ -129,7 +138,16 @@ pub fn parse(text: &str) -> Result<Vec<Setting>, ParamsFileError> {
 /// for an unknown id, at the axis letter for a bad axis, else at the value.
 pub fn apply(text: &str, machine: &mut Machine) -> Result<usize, ParamsFileError> {
     let settings = parse(text)?;
-    for s in &settings {
+    apply_settings(&settings, machine)
+}
+
+/// Sets each value on `machine`, in order, with [`apply`]'s checks and error locations.
+///
+/// # Errors
+///
+/// As [`apply`].
+pub fn apply_settings(settings: &[Setting], machine: &mut Machine) -> Result<usize, ParamsFileError> {
+    for s in settings {
         let def = machine.params.def(&s.id);
         if let (Some(def), Some(axis), Some(axis_span)) = (def, s.axis, s.axis_span) {
             let axes = machine.dialect.axes();
@@ -155,7 +173,7 @@ pub fn apply(text: &str, machine: &mut Machine) -> Result<usize, ParamsFileError
 }
 
 /// A saphyr location as a [`Span`] of `text`.
-fn span_of(text: &str, loc: &Location) -> Span {
+pub(crate) fn span_of(text: &str, loc: &Location) -> Span {
     let line = u32::try_from(loc.line()).unwrap_or(u32::MAX).max(1);
     let col = u32::try_from(loc.column()).unwrap_or(u32::MAX).max(1);
     let span = loc.span();
@@ -168,7 +186,7 @@ fn span_of(text: &str, loc: &Location) -> Span {
 }
 
 /// A saphyr error with its location (start of the file when it has none).
-fn yaml_error(text: &str, e: &serde_saphyr::Error) -> ParamsFileError {
+pub(crate) fn yaml_error(text: &str, e: &serde_saphyr::Error) -> ParamsFileError {
     let loc = e.location();
     let span = match &loc {
         Some(l) if l.line() > 0 => span_of(text, l),
@@ -189,30 +207,31 @@ fn yaml_error(text: &str, e: &serde_saphyr::Error) -> ParamsFileError {
 #[serde(deny_unknown_fields)]
 struct File {
     #[serde(default)]
-    params: Option<Entries>,
+    params: Option<ParamEntries>,
 }
 
 /// The `params` mapping, in the order written.
+/// A `params` mapping as written: ids (numbers or strings) to a number or a per-axis mapping.
 #[derive(Debug, Default)]
-struct Entries(Vec<(Spanned<Key>, Spanned<Value>)>);
+pub struct ParamEntries(Vec<(Spanned<Key>, Spanned<Value>)>);
 
-impl<'de> Deserialize<'de> for Entries {
+impl<'de> Deserialize<'de> for ParamEntries {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         struct V;
         impl<'de> Visitor<'de> for V {
-            type Value = Entries;
+            type Value = ParamEntries;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
                 f.write_str("a mapping of parameter id to value")
             }
-            fn visit_unit<E: de::Error>(self) -> Result<Entries, E> {
-                Ok(Entries::default())
+            fn visit_unit<E: de::Error>(self) -> Result<ParamEntries, E> {
+                Ok(ParamEntries::default())
             }
-            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<Entries, A::Error> {
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<ParamEntries, A::Error> {
                 let mut v = Vec::new();
                 while let Some(k) = m.next_key::<Spanned<Key>>()? {
                     v.push((k, m.next_value::<Spanned<Value>>()?));
                 }
-                Ok(Entries(v))
+                Ok(ParamEntries(v))
             }
         }
         d.deserialize_map(V)
