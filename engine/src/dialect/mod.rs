@@ -46,6 +46,8 @@ pub trait Interpreter {
     fn modal(&self) -> Vec<String>;
     /// Whether rigid tapping mode is on (M29 given, not cancelled).
     fn rigid_mode(&self) -> bool;
+    /// A parameter changed while running: read the new values (modal state stays).
+    fn set_params(&mut self, params: &Params);
 }
 
 /// Every dialect.

@@ -114,7 +114,14 @@ impl Exec<'_> {
                 }
                 self.spindle_changed();
             }
-            Input::SetParam { .. } => {}
+            Input::SetParam { id, axis, value } => match self.params.set(&id, axis, value) {
+                Ok(()) => {
+                    self.cfg = self.dialect.plant_config(&self.params);
+                    self.plc.cfg = self.cfg.plc;
+                    self.interp.set_params(&self.params);
+                }
+                Err(e) => self.raise(Alarm::new(AlarmKind::ParameterOutOfRange, e.to_string())),
+            },
         }
     }
 

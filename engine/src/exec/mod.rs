@@ -13,6 +13,7 @@ mod plc;
 pub mod profile;
 pub mod spindle;
 mod steps;
+mod triggers;
 
 pub use config::{PlantConfig, PlcConfig};
 
@@ -102,6 +103,12 @@ pub(crate) struct Exec<'a> {
     finished: Option<EndReason>,
     /// A block has been read and its steps not yet all taken (single block stops after it).
     in_block: bool,
+    /// Inputs waiting for their condition.
+    pending: Vec<triggers::Pending>,
+    /// The dialect (to re-derive the plant when a parameter changes).
+    dialect: &'static dyn crate::dialect::Dialect,
+    /// The parameters in force.
+    params: crate::params::Params,
     /// The spindle stalled during the present tapping stroke: its angle then.
     stall_angle: Option<f64>,
     /// Source line of the block being executed (located alarms raised while executing it).
@@ -165,6 +172,20 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         in_block: false,
         cur_line: None,
         stall_angle: None,
+        pending: opts
+            .inputs
+            .conditional()
+            .into_iter()
+            .map(|(cond, occurrence, delay_us, input)| triggers::Pending {
+                cond,
+                remaining: occurrence.max(1),
+                delay_us,
+                input,
+                was: false,
+            })
+            .collect(),
+        dialect: machine.dialect,
+        params: machine.params.clone(),
         hold_requested: false,
         motion_step: None,
     };
@@ -175,6 +196,7 @@ impl Exec<'_> {
     fn main_loop(&mut self) {
         self.set_signal(Signal::Stl, true);
         self.set_signal(Signal::Zsp, true);
+        self.check_triggers(None);
         while self.finished.is_none() {
             // Inputs due now act before the next step starts (COM-INP-01).
             if self.inputs.get(self.next_input).is_some_and(|(t, _)| *t <= self.now) {
@@ -224,6 +246,9 @@ impl Exec<'_> {
         if let Some(e) = self.overload_expiry() {
             t = t.min(e.max(self.now));
         }
+        if let Some(c) = self.next_axis_crossing() {
+            t = t.min(c);
+        }
         t
     }
 
@@ -241,6 +266,7 @@ impl Exec<'_> {
 
     /// Everything due at `now`: PLC answers, inputs, overload, the end of the present activity.
     fn handle_events_at(&mut self, t: Micros) {
+        self.check_triggers(None);
         while let Some(a) = self.plc.pop_due(t) {
             self.plc_edge(a);
             if self.finished.is_some() {
@@ -295,7 +321,11 @@ impl Exec<'_> {
         if self.opts.sample_us > 0 && self.next_sample <= self.now {
             self.advance_to(self.now);
         }
-        self.sink.event(&TraceEvent { t_us: self.now, event });
+        let ev = TraceEvent { t_us: self.now, event };
+        self.sink.event(&ev);
+        if !self.pending.is_empty() {
+            self.check_triggers(Some(&ev.event));
+        }
     }
 
     /// Sets a signal, emitting an edge when it changes.

@@ -178,10 +178,9 @@ pub struct FanucInterp {
     ai_contour: bool,
 }
 
-impl FanucInterp {
-    /// The power-on state: G00 G17 G90 G94 G98 G21 G80 G40 G49 G54 G64, at machine zero.
-    pub fn new(p: &Params) -> Self {
-        let set = Settings {
+impl Settings {
+    fn from(p: &Params) -> Settings {
+        Settings {
             dpi: p.bit("3401.0"),
             increment_nm: p.get("nc.increment_nm") as i64,
             max_rpm: p.get("3716") as u32,
@@ -196,7 +195,14 @@ impl FanucInterp {
             rigid_max_rpm: p.get("5241") as u32,
             arc_tolerance_nm: p.get("3410") * NM_PER_MM as f64,
             tap_spindle_check: p.bit("nc.tap_spindle_check"),
-        };
+        }
+    }
+}
+
+impl FanucInterp {
+    /// The power-on state: G00 G17 G90 G94 G98 G21 G80 G40 G49 G54 G64, at machine zero.
+    pub fn new(p: &Params) -> Self {
+        let set = Settings::from(p);
         FanucInterp {
             set,
             pos: [0; AXES],
@@ -565,6 +571,10 @@ impl Interpreter for FanucInterp {
 
     fn rigid_mode(&self) -> bool {
         self.rigid.is_some()
+    }
+
+    fn set_params(&mut self, p: &Params) {
+        self.set = Settings::from(p);
     }
 }
 

@@ -72,19 +72,7 @@ pub struct GskInterp {
 impl GskInterp {
     /// Power-on state.
     pub fn new(p: &Params) -> Self {
-        let cfg = Cfg {
-            clamp_code: p.get("170") as u32,
-            q_in_mm: p.bit("182.7"),
-            rtcrg: p.bit("186.2"),
-            overload_spindle: p.bit("186.5"),
-            rtori: p.bit("186.7"),
-            overload_delay_us: (p.get("270") * 1000.0) as Micros,
-            overload_pct: p.get("271") as u32,
-            d_clamp: p.get("nc.d_above_150") != 0.0,
-            rt_max_rpm: p.get("nc.rt_max_rpm") as u32,
-            spindle_max_rpm: p.get("nc.spindle_max_rpm") as u32,
-            increment_nm: p.get("nc.increment_nm") as i64,
-        };
+        let cfg = Cfg::from(p);
         GskInterp {
             units: Units { inch: false, dpi: p.bit("nc.dpi"), increment_nm: cfg.increment_nm },
             cfg,
@@ -102,7 +90,27 @@ impl GskInterp {
             inch: false,
         }
     }
+}
 
+impl Cfg {
+    fn from(p: &Params) -> Cfg {
+        Cfg {
+            clamp_code: p.get("170") as u32,
+            q_in_mm: p.bit("182.7"),
+            rtcrg: p.bit("186.2"),
+            overload_spindle: p.bit("186.5"),
+            rtori: p.bit("186.7"),
+            overload_delay_us: (p.get("270") * 1000.0) as Micros,
+            overload_pct: p.get("271") as u32,
+            d_clamp: p.get("nc.d_above_150") != 0.0,
+            rt_max_rpm: p.get("nc.rt_max_rpm") as u32,
+            spindle_max_rpm: p.get("nc.spindle_max_rpm") as u32,
+            increment_nm: p.get("nc.increment_nm") as i64,
+        }
+    }
+}
+
+impl GskInterp {
     /// X word (diameter) or U (incremental diameter) → physical radius target.
     fn axis_target(
         &self,
@@ -660,6 +668,12 @@ impl Interpreter for GskInterp {
 
     fn rigid_mode(&self) -> bool {
         self.rigid
+    }
+
+    fn set_params(&mut self, p: &Params) {
+        self.cfg = Cfg::from(p);
+        self.units.dpi = p.bit("nc.dpi");
+        self.units.increment_nm = self.cfg.increment_nm;
     }
 }
 
