@@ -33,7 +33,7 @@ fn rule_ids(text: &str) -> BTreeSet<String> {
             while end < b.len() && b[end].is_ascii_uppercase() {
                 end += 1;
             }
-            if end < b.len() && b[end] == b'-' {
+            if end > start + fam.len() && end < b.len() && b[end] == b'-' {
                 let mut d = end + 1;
                 while d < b.len() && b[d].is_ascii_digit() {
                     d += 1;

@@ -111,12 +111,12 @@ fn gsk_rt_rtori_orients_the_spindle_before_the_first_hole() {
 
 #[test]
 fn com_plc_zero_speed_rises_when_the_spindle_has_stopped_unless_withheld() {
-    // 1000 rpm, ramp 1000 ms per 6000 rpm: stopping takes 166.7 ms after M05.
+    // 1000 rpm, ramp 1000 ms per 6000 rpm: stopping takes 166.7 ms after M05, ZSP 8 ms later.
     let text = "S1000 M3;\nG4 P2000;\nM5;\nG4 P1000;\nM30;\n";
     let t = run("gsk-lathe", &[], text, &RunOptions::default());
     let m5 = t.functions().find(|f| f.2 == 5).unwrap().0;
     let rise = t.edges(Signal::Zsp).filter(|e| e.1).nth(1).unwrap().0;
-    assert_eq!(rise - m5, 166_667);
+    assert_eq!(rise - m5, 166_667 + 8_000);
     let inputs =
         InputSchedule::default().at(0, Input::PlcAnswer { answer: PlcAnswer::ZeroSpeed, extra_us: None });
     let t = run("gsk-lathe", &[], text, &with(inputs));

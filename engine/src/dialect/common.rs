@@ -47,6 +47,7 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
             m29_timeout_us: ms("plc.m29_timeout_ms"),
             fin_timeout_us: ms("plc.fin_timeout_ms"),
             spindle_stall_us: ms("plc.spindle_stall_ms"),
+            zsp_us: ms("plc.zsp_ms"),
         },
     }
 }

@@ -57,6 +57,7 @@ pub static PARAMS: &[ParamDef] = &[
     num("plc.rgtap_fall_ms", "RGTAP fall delay", Int, 0.0, 10000.0, 16.0, "ms", "F76.3 falling to RGTAP falling."),
     num("plc.m29_timeout_ms", "M29 answer timer", Int, 1.0, 600000.0, 2000.0, "ms", "No reached answer within this time after the request: alarm 5002."),
     num("plc.fin_timeout_ms", "FIN timer", Int, 1.0, 600000.0, 10000.0, "ms", "No FIN within this time: alarm NC-1020."),
+    num("plc.zsp_ms", "zero-speed detection time", Int, 0.0, 10000.0, 8.0, "ms", "The spindle must stay stopped this long before the drive reports zero speed (ZSP)."),
     num("plc.spindle_stall_ms", "stall timer", Int, 100.0, 600000.0, 100.0, "ms", "Spindle not rotating while rigid tapping commands it for this long: alarm 5074."),
 ];
 

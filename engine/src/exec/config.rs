@@ -22,6 +22,8 @@ pub struct PlcConfig {
     pub m29_timeout_us: Micros,
     /// PLC timer for FIN of any function (alarm NC-1020).
     pub fin_timeout_us: Micros,
+    /// How long the drive must see the spindle stopped before it reports zero speed (ZSP).
+    pub zsp_us: Micros,
     /// PLC timer for a spindle that does not rotate while it should in rigid tapping (alarm 5074).
     pub spindle_stall_us: Micros,
 }

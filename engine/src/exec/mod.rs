@@ -345,7 +345,7 @@ impl Exec<'_> {
             self.set_signal(Signal::Zsp, false);
         }
         if self.spindle.target == 0.0 {
-            let t = self.spindle.ramp_end().max(self.now);
+            let t = self.spindle.ramp_end().max(self.now) + self.cfg.plc.zsp_us;
             self.plc.answer(
                 self.now,
                 t - self.now,

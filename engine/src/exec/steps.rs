@@ -310,9 +310,10 @@ impl Exec<'_> {
             self.spindle.hold(end, angle);
             self.set_signal(Signal::Rgspp, false);
             self.set_signal(Signal::Rgspm, false);
+            let zsp = self.cfg.plc.zsp_us;
             self.plc.answer(
                 self.now,
-                0,
+                zsp,
                 crate::input::PlcAnswer::ZeroSpeed,
                 super::plc::PlcAction::ZeroSpeed,
             );
