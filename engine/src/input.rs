@@ -147,7 +147,7 @@ pub enum Condition {
         /// 1 or 0.
         value: bool,
     },
-    /// An axis' command position is strictly below this (nm, reported units: diameter for a
+    /// An axis' machine position (as sampled) is strictly below this (nm, reported units: diameter for a
     /// lathe's X).
     AxisBelow {
         /// Axis slot.
@@ -155,7 +155,7 @@ pub enum Condition {
         /// Threshold.
         nm: Nm,
     },
-    /// An axis' command position is strictly above this.
+    /// An axis' machine position (as sampled) is strictly above this.
     AxisAbove {
         /// Axis slot.
         axis: usize,

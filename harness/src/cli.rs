@@ -2,6 +2,8 @@
 //!
 //! `nc-conform run PROGRAM --dialect NAME [--params FILE.yaml] [--sample-us N] [--out FILE]`
 //! parses the program, runs it on the reference engine and streams the trace as JSON Lines.
+//! `nc-conform run SCENARIO.yaml [--format jsonl|vcd|timing] [--out FILE]` runs a scenario and
+//! prints its verdicts, or writes its trace in the chosen format (see [`crate::cli_scenario`]).
 //!
 //! Exit status: 0 when the program ran to its end (end reason `program_end`), 1 when the run
 //! ended any other way (an alarm, a reset, a stop, the time limit), 2 for errors in what was
@@ -51,13 +53,20 @@ pub enum Command {
 /// Arguments of `nc-conform run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// The G-code program file to run.
+    /// The G-code program file to run, or a scenario file (`.yaml`/`.yml`, docs/scenarios.md).
     #[arg(value_name = "PROGRAM")]
     pub program: PathBuf,
 
-    /// The control dialect the program is written for, which decides what each word means.
+    /// The control dialect the program is written for, which decides what each word means
+    /// (required for a program; a scenario names its own).
     #[arg(long, value_name = "DIALECT", value_parser = PossibleValuesParser::new(nc_engine::dialect_names()))]
-    pub dialect: String,
+    pub dialect: Option<String>,
+
+    /// For a scenario: write its trace in this format instead of printing the verdicts —
+    /// `jsonl` (docs/trace-format.md), `vcd` (GTKWave, Surfer) or `timing` (the ASCII timing
+    /// diagram of the scenario's snapshot). The exit status still follows the verdicts.
+    #[arg(long, value_name = "FORMAT", value_parser = ["jsonl", "vcd", "timing"])]
+    pub format: Option<String>,
 
     /// A YAML file of machine parameter values that override the dialect's defaults (format:
     /// docs/parameters-format.md).
@@ -93,8 +102,22 @@ pub fn run(args: &RunArgs) -> u8 {
 }
 
 fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
-    let mut machine = Machine::new(&args.dialect).ok_or_else(|| {
-        let mut e = InputError::new("--dialect", format!("unknown dialect `{}`", args.dialect));
+    if crate::cli_scenario::is_scenario(&args.program) {
+        return crate::cli_scenario::run(args);
+    }
+    if args.format.as_deref().is_some_and(|f| f != "jsonl") {
+        return Err(InputError::new(
+            "--format",
+            "a program's trace is written as jsonl; vcd and timing are for scenarios",
+        ));
+    }
+    let Some(dialect) = &args.dialect else {
+        let mut e = InputError::new("--dialect", "a program needs --dialect");
+        e.expected = Some(format!("one of: {}", nc_engine::dialect_names().join(", ")));
+        return Err(e);
+    };
+    let mut machine = Machine::new(dialect).ok_or_else(|| {
+        let mut e = InputError::new("--dialect", format!("unknown dialect `{dialect}`"));
         e.expected = Some(format!("one of: {}", nc_engine::dialect_names().join(", ")));
         e
     })?;
@@ -133,7 +156,7 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
 }
 
 /// A path as the user wrote it.
-fn display_name(path: &Path) -> String {
+pub(crate) fn display_name(path: &Path) -> String {
     path.display().to_string()
 }
 
@@ -167,7 +190,9 @@ mod tests {
         let mut cmd = Cli::command();
         let run = cmd.find_subcommand_mut("run").expect("run subcommand");
         let help = run.render_long_help().to_string();
-        for flag in ["--dialect", "--params", "--sample-us", "--out", "PROGRAM"] {
+        for flag in
+            ["--dialect", "--params", "--sample-us", "--out", "--format", "PROGRAM", "jsonl", "vcd", "timing"]
+        {
             assert!(help.contains(flag), "{flag} missing from:\n{help}");
         }
         for d in nc_engine::dialect_names() {

@@ -6,10 +6,13 @@
 //! - [`cli`]: the `nc-conform` command line;
 //! - [`jsonl`]: the JSON Lines trace writer (`docs/trace-format.md`);
 //! - [`params_yaml`]: parameter files (`docs/parameters-format.md`);
-//! - [`diag`]: input errors with their location, rendered with miette or as plain text.
+//! - [`diag`]: input errors with their location, rendered with miette or as plain text;
+//! - [`render`]: event listings, ASCII timing diagrams and VCD files of a trace.
 
 pub mod cli;
+pub mod cli_scenario;
 pub mod diag;
 pub mod jsonl;
 pub mod params_yaml;
+pub mod render;
 pub mod scenario;

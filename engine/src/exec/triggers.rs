@@ -58,14 +58,15 @@ impl Exec<'_> {
             Condition::Function { letter, code } => {
                 matches!(event, Some(Event::Function { letter: l, code: c }) if l == letter && c == code)
             }
-            Condition::AxisBelow { axis, nm } => self.reported_command(self.now, *axis) < *nm,
-            Condition::AxisAbove { axis, nm } => self.reported_command(self.now, *axis) > *nm,
+            Condition::AxisBelow { axis, nm } => self.reported_machine(self.now, *axis) < *nm,
+            Condition::AxisAbove { axis, nm } => self.reported_machine(self.now, *axis) > *nm,
         }
     }
 
-    /// Command position of an axis in reported units (diameter for a lathe's X).
-    fn reported_command(&self, t: Micros, axis: usize) -> i64 {
-        let v = self.command_pos(t)[axis];
+    /// Machine position of an axis in reported units (diameter for a lathe's X): what the trace's
+    /// samples show, so that inputs and checks on the same condition agree.
+    fn reported_machine(&self, t: Micros, axis: usize) -> i64 {
+        let v = self.machine_pos(t)[axis];
         if axis == 0 && self.diameter_x {
             v * 2
         } else {
@@ -88,7 +89,7 @@ impl Exec<'_> {
                 continue;
             }
             let holds = |t: Micros| {
-                let v = self.reported_command(t, axis);
+                let v = self.reported_machine(t, axis);
                 if below {
                     v < nm
                 } else {

@@ -2,6 +2,12 @@
 //! (`docs/scenarios.md`).
 //!
 //! - [`schema`]: the file format as serde types;
-//! - [`resolve`]: names in the file → engine values, with located errors.
+//! - [`resolve`]: names in the file → engine values, with located errors;
+//! - [`load`]: a file → a runnable [`load::Scenario`];
+//! - [`run`]: trace and verdicts.
+pub mod expect;
+pub mod load;
 pub mod resolve;
+pub mod run;
 pub mod schema;
+pub mod timeline;

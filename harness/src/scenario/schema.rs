@@ -60,7 +60,7 @@ pub struct ScenarioFile {
     pub params: ParamEntries,
     /// The program text (exclusive with `program_file`).
     #[serde(default)]
-    pub program: Option<String>,
+    pub program: Option<Spanned<String>>,
     /// A program file, relative to the scenario file.
     #[serde(default)]
     pub program_file: Option<Spanned<String>>,
