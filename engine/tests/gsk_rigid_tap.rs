@@ -342,8 +342,7 @@ fn gsk_rt_reset_while_cutting_restores_the_spindle_and_drops_the_signals() {
     let end = t.end().unwrap();
     assert_eq!(end.reason, EndReason::Reset, "{}", support::events(&t));
     assert!(!end.signals.get(Signal::Rtap) && !end.signals.get(Signal::Rgtap));
-    let last = t.samples().last().unwrap().1;
-    assert!(last.spindle_mrpm > 0, "spindle ramps back to its pre-M29 forward speed");
+    assert_eq!(end.state.spindle_mrpm, 300_000, "spindle back at its pre-M29 300 rpm forward");
 }
 
 #[test]

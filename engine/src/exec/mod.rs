@@ -459,6 +459,12 @@ impl Exec<'_> {
         if matches!(reason, EndReason::ProgramEnd | EndReason::Reset | EndReason::Alarm) {
             self.settle();
         }
+        if reason == EndReason::Reset {
+            // The spindle is back in its state before M29 once its ramp has ended (GSK-RT-25).
+            let t = self.spindle.ramp_end().max(self.now);
+            self.advance_to(t);
+            self.settle();
+        }
         let state = self.sample_at(self.now);
         let mut command = self.command_pos(self.now);
         if self.diameter_x {
