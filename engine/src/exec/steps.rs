@@ -75,7 +75,8 @@ impl Exec<'_> {
             Step::Function { letter, code, effect } => self.start_function(letter, code, effect),
             Step::RigidEnter { code, rpm } => {
                 self.emit(Event::Function { letter: 'M', code });
-                let (_, rpm_now) = self.spindle.at(now);
+                // The state before M29 is what the spindle was commanded to do (it may still be ramping).
+                let rpm_now = self.spindle.target;
                 self.pre_rigid_rpm = Some(self.pre_rigid_rpm.unwrap_or(rpm_now));
                 self.s_cmd = rpm;
                 self.spindle.command(now, 0.0);
