@@ -41,10 +41,20 @@ fn check(path: &Path, rel: &str) -> Result<(), Failed> {
     settings.set_omit_expression(true);
     settings.set_description(rel);
     let diagram = timing_diagram(&outcome.trace, &s.diagram);
-    let events = event_listing(&outcome.trace);
+    // A scenario that expects a refusal snapshots the diagnostic the user would see instead.
+    let events = match &s.refusal {
+        Some((Some(e), _, text)) => {
+            nc_conform::cli::parse_error(&format!("{rel} (program)"), text, e).render_plain()
+        }
+        Some((None, _, _)) => "the program parsed\n".to_string(),
+        None => event_listing(&outcome.trace),
+    };
+    let refused = s.refusal.is_some();
     // Both snapshots are compared (and written for review) even when the first differs.
     let timing = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        settings.bind(|| insta::assert_snapshot!(format!("{name}.timing"), diagram))
+        if !refused {
+            settings.bind(|| insta::assert_snapshot!(format!("{name}.timing"), diagram))
+        }
     }));
     let listing = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         settings.bind(|| insta::assert_snapshot!(format!("{name}.events"), events))
@@ -60,7 +70,7 @@ fn main() {
     let args = Arguments::from_args();
     let mut files = Vec::new();
     scenario_files(&root().join("scenarios"), &mut files);
-    let trials = files
+    let trials: Vec<Trial> = files
         .into_iter()
         .map(|p| {
             let rel = p.strip_prefix(root()).unwrap_or(&p).to_string_lossy().replace('\\', "/");

@@ -154,6 +154,19 @@ fn lex_line(line: &str, line_no: u32, rules: &LexRules) -> Result<Option<Block>,
                         format!("one of the letters {}", rules.letters),
                     ));
                 }
+                while cur.peek().is_some_and(is_blank) {
+                    cur.bump();
+                }
+                // `X#1`, `Z[#2*3]`: name the macro feature rather than a missing value.
+                if let Some(m @ ('#' | '[')) = cur.peek() {
+                    return Err(error(
+                        line_no,
+                        cur.col,
+                        1,
+                        unexpected(m, rules.dialect),
+                        format!("a number after {letter}, e.g. {letter}12.5"),
+                    ));
+                }
                 let value = number(&mut cur, letter, line_no, col)?;
                 let len = cur.col.saturating_sub(col);
                 if letter == 'N' {

@@ -11,7 +11,7 @@ use serde_saphyr::Spanned;
 
 use super::expect::{self, Expectations};
 use super::resolve::{ms_to_us, Ctx};
-use super::schema::{InputEntry, ScenarioFile};
+use super::schema::{ExpectRefused, InputEntry, ScenarioFile};
 use crate::diag::{InputError, Span};
 use crate::params_yaml::{self, span_of};
 use crate::render::timing::DiagramSpec;
@@ -35,6 +35,9 @@ pub struct Scenario {
     pub expect: Expectations,
     /// The timing diagram to snapshot.
     pub diagram: DiagramSpec,
+    /// The parser's refusal, when the scenario expects one (`expect.refused`): the program is
+    /// then empty and the verdict compares this error with the expectation.
+    pub refusal: Option<(Option<nc_engine::ParseError>, ExpectRefused, String)>,
 }
 
 /// Reads and checks a scenario file. `name` is how errors and reports name it.
@@ -85,7 +88,18 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
         ));
     }
     let rules: Vec<String> = file.rules.iter().map(|r| r.value.clone()).collect();
-    let program = program(&file, &machine, &ctx, dir)?;
+    let (program, refusal) = match &file.expect.refused {
+        None => (program(&file, &machine, &ctx, dir)?, None),
+        Some(r) => {
+            let text = match (&file.program, &file.program_file) {
+                (Some(p), None) => p.value.clone(),
+                _ => return Err(ctx.err(r, "`expect.refused` needs an inline `program`", "program: | ...")),
+            };
+            let parsed = machine.parse(&text);
+            let err = parsed.err();
+            (Program::default(), Some((err, r.value.clone(), text)))
+        }
+    };
     let mut inputs = InputSchedule::default();
     for entry in &file.inputs {
         let (trigger, input) = input(&ctx, entry)?;
@@ -99,7 +113,17 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
     };
     let expect = expect::resolve(&ctx, &file.expect, &rules[0])?;
     let diagram = diagram(&ctx, &file)?;
-    Ok(Scenario { name: name.to_string(), title: file.title, rules, machine, program, opts, expect, diagram })
+    Ok(Scenario {
+        name: name.to_string(),
+        title: file.title,
+        rules,
+        machine,
+        program,
+        opts,
+        expect,
+        diagram,
+        refusal,
+    })
 }
 
 fn at(name: &str, text: &str, e: params_yaml::ParamsFileError) -> InputError {

@@ -4,8 +4,11 @@ use std::fmt::Write as _;
 
 use nc_engine::Trace;
 
+use nc_engine::ParseError;
+
 use super::expect::{self, Verdict};
 use super::load::Scenario;
+use super::schema::ExpectRefused;
 
 /// What a run gave.
 #[derive(Debug)]
@@ -60,6 +63,37 @@ impl Outcome {
 /// Runs the scenario and evaluates its expectations.
 pub fn run(s: &Scenario) -> Outcome {
     let trace = s.machine.run_to_trace(&s.program, &s.opts);
-    let verdicts = expect::evaluate(&s.expect, &trace);
+    let verdicts = match &s.refusal {
+        Some(r) => vec![refusal_verdict(s, r)],
+        None => expect::evaluate(&s.expect, &trace),
+    };
     Outcome { trace, verdicts }
+}
+
+/// The verdict on `expect.refused`: the parser refused the program where and why expected.
+fn refusal_verdict(s: &Scenario, (err, want, _): &(Option<ParseError>, ExpectRefused, String)) -> Verdict {
+    let rule = s.rules[0].clone();
+    let expected = format!(
+        "refused at line {}{}{}",
+        want.line,
+        want.col.map_or(String::new(), |c| format!(", column {c}")),
+        want.message.as_ref().map_or(String::new(), |m| format!(", message containing `{m}`"))
+    );
+    let (pass, actual, t_us) = match err {
+        None => (false, "the program parsed".to_string(), None),
+        Some(e) => {
+            let ok = e.line == want.line
+                && want.col.is_none_or(|c| c == e.col)
+                && want.message.as_ref().is_none_or(|m| e.message.contains(m.as_str()));
+            (
+                ok,
+                format!(
+                    "refused at line {}, column {}: {}; expected {}",
+                    e.line, e.col, e.message, e.expected
+                ),
+                None,
+            )
+        }
+    };
+    Verdict { rule, what: "refused".into(), pass, t_us, expected, actual }
 }

@@ -247,6 +247,23 @@ pub struct Expect {
     /// Proof that something actually happened.
     #[serde(default)]
     pub reached: Vec<Spanned<Reached>>,
+    /// The program must be refused by the parser (a syntax error), here.
+    #[serde(default)]
+    pub refused: Option<Spanned<ExpectRefused>>,
+}
+
+/// Where and why the parser must refuse the program.
+#[derive(Debug, Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct ExpectRefused {
+    /// Program line (1-based).
+    pub line: u32,
+    /// Column (1-based), if checked.
+    #[serde(default)]
+    pub col: Option<u32>,
+    /// A text the message must contain.
+    #[serde(default)]
+    pub message: Option<String>,
 }
 
 /// One expected alarm.
