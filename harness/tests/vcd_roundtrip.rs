@@ -144,7 +144,7 @@ fn every_scenario_vcd_reads_back() {
 /// Writes the trace as VCD, reads it back and compares; returns the number of signal edges.
 fn assert_reads_back(trace: &Trace) -> usize {
     let end = trace.end().expect("end").clone();
-    let rb = read_back(&trace);
+    let rb = read_back(trace);
     assert_eq!(rb.header.version.as_deref(), Some("nc-conform"));
     assert_eq!(rb.header.timescale, Some((1, TimescaleUnit::US)));
     assert_eq!(rb.last_t, trace.events.last().unwrap().t_us);
