@@ -188,6 +188,7 @@ fn gsk_rt_m29_misuse_alarms(#[case] middle: &str, #[case] code: &str) {
 #[case::no_lead("G98;\nG0 X50 Z0;\nM29 S500;\nG84 Z-10;\n", "NC-1002")]
 #[case::switch_without_bottom("G98;\nG0 X50 Z0;\nM29 S500;\nG84 Z-10 F1;\nG88 Z-5;\n", "NC-1013")]
 #[case::m29_without_s("G98;\nG0 X50 Z0;\nM29;\n", "NC-1002")]
+#[case::axis_word_in_the_m29_block("G98;\nG0 X50 Z0;\nZ5 M29 S500;\nG84 Z-10 F1;\n", "NC-1011")]
 fn gsk_rt_bad_programs_alarm(#[case] text: &str, #[case] code: &str) {
     let t = run_default("gsk-lathe", text);
     let alarms: Vec<_> = t.alarms().map(|(_, a)| a.kind.code()).collect();

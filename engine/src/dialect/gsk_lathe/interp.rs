@@ -545,8 +545,8 @@ impl Interpreter for GskInterp {
         }
         let targets = self.targets(&w)?;
         let moves = targets.iter().any(Option::is_some);
-        // An axis move between M29 and the tapping block (GSK-RT-12).
-        if self.m29_pending && moves && cycle_g.is_none() && !w.m.iter().any(|(c, _)| *c == 29) {
+        // An axis move between M29 and the tapping block, the M29 block included (GSK-RT-12).
+        if self.m29_pending && moves && cycle_g.is_none() {
             let word = ['X', 'U', 'Z', 'W', 'C', 'H'].iter().find_map(|&l| w.get(l)).unwrap();
             return Err(w.alarm(
                 AlarmKind::AxisMoveAfterM29,
