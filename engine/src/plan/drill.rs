@@ -125,7 +125,7 @@ pub fn drill(c: &DrillCycle, out: &mut Vec<Step>) {
         }
         DrillKind::DeepPeck | DrillKind::HighSpeedPeck => {
             let deep = c.kind == DrillKind::DeepPeck;
-            // Q0: one cut to the bottom (FAN-CYC decision, as GSK Q0).
+            // The dialect refuses q <= 0 (FAN-CYC-13); should one come anyway, one cut to the bottom.
             let q = if c.q > 0 { c.q } else { Nm::MAX / 4 };
             let mut reached: Nm = 0;
             loop {

@@ -177,6 +177,15 @@ impl FanucInterp {
                     }
                 }
                 let q = match self.data.q {
+                    // G73 / G83: the depth of cut must be > 0 (FAN-CYC-13, FAN-CYC-14).
+                    Some(q) if q <= 0 && is_peck(code) => {
+                        return Err(locate(
+                            w,
+                            w.get('Q').or(at),
+                            AlarmKind::WordOutOfRange,
+                            format!("{}: the depth of cut Q must be > 0", g_name(code)),
+                        ))
+                    }
                     Some(q) => q,
                     None if is_peck(code) => return Err(missing("Q (the depth of cut)")),
                     _ => 0,
