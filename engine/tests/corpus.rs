@@ -73,9 +73,9 @@ fn fanuc_mill_tapping_programs_run_to_the_end() {
     ];
     let m = Machine::new("fanuc-mill").unwrap();
     for (name, text) in corpus().into_iter().filter(|(n, _)| must_run.contains(&n.as_str())) {
-        // Three of the posts write G73 / G83 with Q0, which the control refuses (FAN-CYC-13, see
-        // `peck_cycles_with_q0_are_refused`): with a real depth of cut they run to their end.
-        let text = peck_q0_fixed(&text);
+        // The posts' bugs that the control refuses (see `post_bugs_are_refused_where_they_act`)
+        // fixed, they run to their end.
+        let text = post_bugs_fixed(&text);
         let p = m.parse(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
         let t = m.run_to_trace(&p, &opts());
         let end = t.end().unwrap();
@@ -85,12 +85,14 @@ fn fanuc_mill_tapping_programs_run_to_the_end() {
     }
 }
 
-/// `text` with each Q0 of a G73 / G83 block made a depth of cut of 0.1.
-fn peck_q0_fixed(text: &str) -> String {
+/// `text` with the post bugs that the control refuses fixed: each Q0 of a G73 / G83 block made a
+/// depth of cut of 0.1, and `S0 M03` (a spindle started at speed 0) made `S500 M03`.
+fn post_bugs_fixed(text: &str) -> String {
     let fix = |line: &str| {
+        let line = line.replace("S0 M03", "S500 M03");
         let words: Vec<&str> = line.split(' ').collect();
         if !words.iter().any(|w| matches!(*w, "G73" | "G83")) {
-            return line.to_string();
+            return line;
         }
         let words: Vec<&str> =
             words.into_iter().map(|w| if matches!(w, "Q0" | "Q0.0") { "Q.1" } else { w }).collect();
@@ -101,22 +103,24 @@ fn peck_q0_fixed(text: &str) -> String {
 
 /// NX posts write G73 / G83 with Q0 (`G83 … Q0.0`): G73 and G83 need a depth of cut Q > 0, so
 /// the reference stops there with NC-1001 (FAN-CYC-13, FAN-CYC-14), as a Fanuc control refuses
-/// Q0 in these cycles.
+/// Q0 in these cycles. The Makino post starts the spindle with `S0 M03` before a conventional
+/// G84: NC-1017 (FAN-RT-17). Each runs to its end once its bug is fixed.
 #[test]
-fn peck_cycles_with_q0_are_refused() {
+fn post_bugs_are_refused_where_they_act() {
     let cases = [
-        ("Unigraphics__NX.Postprocessor__Haas_5T.ptp", 977),
-        ("Unigraphics__NX.Postprocessor__Yama_Seiki_VMB_1600_Fanuc_sample_part_in.ptp", 53),
-        ("Unigraphics__NX.Postprocessor__MS_NMV_sample_output.txt", 862),
+        ("Unigraphics__NX.Postprocessor__Haas_5T.ptp", "NC-1001", 977),
+        ("Unigraphics__NX.Postprocessor__Yama_Seiki_VMB_1600_Fanuc_sample_part_in.ptp", "NC-1001", 53),
+        ("Unigraphics__NX.Postprocessor__MS_NMV_sample_output.txt", "NC-1001", 862),
+        ("Unigraphics__NX.Postprocessor__makino_v33_output.txt", "NC-1017", 141),
     ];
     let m = Machine::new("fanuc-mill").unwrap();
-    for (name, line) in cases {
+    for (name, code, line) in cases {
         let (_, text) = corpus().into_iter().find(|(n, _)| n == name).unwrap();
         let t = m.run_to_trace(&m.parse(&text).unwrap(), &opts());
         let alarms: Vec<_> = t.alarms().map(|(_, a)| (a.kind.code(), a.line)).collect();
-        assert_eq!(alarms, [("NC-1001", Some(line))], "{name}");
+        assert_eq!(alarms, [(code, Some(line))], "{name}");
         assert_eq!(t.end().unwrap().reason, EndReason::Alarm, "{name}");
-        let fixed = m.parse(&peck_q0_fixed(&text)).unwrap();
+        let fixed = m.parse(&post_bugs_fixed(&text)).unwrap();
         assert_eq!(m.run_to_trace(&fixed, &opts()).alarms().count(), 0, "{name}");
     }
 }

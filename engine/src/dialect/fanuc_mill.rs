@@ -46,7 +46,7 @@ pub static PARAMS: &[ParamDef] = &[
     num("5213", "peck return", Real, 0.0, 999.999, 1.0, "mm", "High-speed peck: retract amount d after each cut."),
     num("5241", "rigid max speed", Int, 1.0, 60000.0, 4000.0, "rpm", "Maximum S in rigid tapping (above: alarm 0200)."),
     num("5261", "rigid time constant", Int, 0.0, 4000.0, 200.0, "ms", "Shared time constant of spindle and tap axis at 5241 (scaled by S/max)."),
-    bit("nc.tap_spindle_check", "tap spindle check", 0.0, "1: conventional G84/G74 with the spindle not turning in the cutting direction (or S0) raise NC-1017 (as LinuxCNC); 0: they run as a Fanuc control does, feeding at F."),
+    bit("nc.tap_spindle_check", "tap spindle check", 1.0, "1: conventional G84/G74 with the spindle not turning in the cutting direction (or S0) raise NC-1017 (seed 003 step 0); 0: no check, they run feeding at F."),
     num("nc.period_us", "interpolation period", Int, 1000.0, 8000.0, 1000.0, "us", "Interpolation period: 1000, 2000, 4000 or 8000."),
     num("nc.increment_nm", "least input increment", Int, 100.0, 1000.0, 1000.0, "nm", "1000 (IS-B, 0.001 mm) or 100 (IS-C)."),
     num("nc.spindle_ramp_ms", "spindle time constant", Int, 0.0, 20000.0, 1000.0, "ms", "Time from 0 to the maximum spindle speed."),

@@ -155,9 +155,9 @@ fn conventional_tap_spindle_check_is_a_parameter(
     #[case] line: u32,
     #[case] col: Option<u32>,
 ) {
-    // Fanuc feeds at F whatever the spindle does (default); nc.tap_spindle_check = 1 refuses it.
-    assert!(run_with(&[], text).is_ok());
-    let a = run_with(&[("nc.tap_spindle_check", 1.0)], text).unwrap_err();
+    // FAN-RT-17, DEC-40: refused by default; nc.tap_spindle_check = 0 lets it feed at F.
+    assert!(run_with(&[("nc.tap_spindle_check", 0.0)], text).is_ok());
+    let a = run_with(&[], text).unwrap_err();
     assert_eq!((a.kind.code(), a.line, a.col), (code, Some(line), col), "{}", a.message());
 }
 
