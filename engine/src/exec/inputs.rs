@@ -75,7 +75,10 @@ impl Exec<'_> {
                 }
             }
             Input::FeedHold => {
-                if self.hold_suppressed && !self.cfg.hold_in_rigid_tap {
+                // FHD (hold_in_rigid_tap) lets feed hold act in rigid tapping only (spindle in
+                // position mode), never in conventional tapping (FAN-RT-15, FAN-RT-16).
+                let fhd = self.cfg.hold_in_rigid_tap && self.spindle.position_mode;
+                if self.hold_suppressed && !fhd {
                     self.hold_pending = true;
                 } else {
                     self.feed_hold_now();
