@@ -217,7 +217,14 @@ impl Exec<'_> {
         let Some(w) = self.overload.take() else { return };
         self.over_since = None;
         let tap = self.motion.as_ref().and_then(|m| match m.path {
-            Path::Tap { axis, lead, spin, .. } => Some((axis, lead, spin)),
+            Path::Tap { axis, lead, spin, .. } => {
+                // The spindle turns with the tap axis (travel = lead x revolutions): the return
+                // keeps the stroke's direction when the stroke already moves towards the start
+                // point (a peck retract), and reverses it otherwise (a cut) (COM-SYNC-05).
+                let stroke = (m.target[axis] - m.start[axis]).signum();
+                let back = (w.return_to - m.pos(self.now)[axis]).signum();
+                Some((axis, lead, if stroke != 0 && stroke == back { spin } else { -spin }))
+            }
             _ => None,
         });
         self.emit(Event::Input { name: "overload_trip".into(), value: format!("{}%", w.threshold_pct) });
@@ -234,7 +241,7 @@ impl Exec<'_> {
             target: w.return_to,
             lead_nm: lead as i64,
             rpm: self.s_cmd.max(1),
-            spindle_forward: spin < 0.0,
+            spindle_forward: spin > 0.0,
             override_pct: 100,
             cutting: false,
         }));
