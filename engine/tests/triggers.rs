@@ -98,3 +98,19 @@ fn com_inp_parameter_change_takes_effect_and_a_bad_value_alarms() {
     let (at, a) = t.alarms().next().unwrap();
     assert_eq!((at, a.kind.code()), (100_000, "NC-1040"));
 }
+
+#[test]
+fn com_inp_phase_idle_condition_waits_for_the_first_entry() {
+    // The power-on idle is no entry: the input acts when the cycle ends and enters idle.
+    let i = InputSchedule::default().when(Condition::Phase(Phase::Idle), 1, 0, Input::EmergencyStop(true));
+    let t = run("gsk-lathe", &[], TAP, &opts(i));
+    let at = input_time(&t, "emergency_stop");
+    let idle = t
+        .events
+        .iter()
+        .find(|e| matches!(e.event, nc_engine::Event::Phase(Phase::Idle)))
+        .expect("an entry into idle")
+        .t_us;
+    assert!(at > 0);
+    assert_eq!(at, idle);
+}

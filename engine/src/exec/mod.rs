@@ -177,11 +177,12 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
             .conditional()
             .into_iter()
             .map(|(cond, occurrence, delay_us, input)| triggers::Pending {
+                // The power-on idle is no entry into idle: a phase condition counts entries.
+                was: cond == crate::input::Condition::Phase(Phase::Idle),
                 cond,
                 remaining: occurrence.max(1),
                 delay_us,
                 input,
-                was: false,
             })
             .collect(),
         dialect: machine.dialect,
