@@ -370,10 +370,14 @@ impl Exec<'_> {
         }
         self.alarms += 1;
         self.emit(Event::Alarm(alarm));
-        if let Some(m) = &self.motion {
-            self.cmd = m.pos(self.now);
+        // The motion stops where it is: a tapping stroke ends with the spindle at rest at its
+        // present (or frozen) angle and RGSPP / RGSPM off (COM-SYNC-03, COM-INP-09); the drive
+        // reports zero speed unless it already does.
+        if let Some(m) = &mut self.motion {
+            m.stop_at(self.now, f64::INFINITY, self.cfg.period_us);
         }
-        self.motion = None;
+        let zsp = self.signals.get(Signal::Zsp);
+        self.end_motion_then(!zsp);
         self.finish(EndReason::Alarm);
     }
 

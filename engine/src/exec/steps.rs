@@ -300,6 +300,12 @@ impl Exec<'_> {
 
     /// The present motion reached its end.
     pub(super) fn end_motion(&mut self) {
+        self.end_motion_then(true);
+    }
+
+    /// The present motion ends: positions and the spindle stay where the motion leaves them, a
+    /// tapping stroke drops RGSPP / RGSPM and (with `zsp_answer`) asks the drive for zero speed.
+    pub(super) fn end_motion_then(&mut self, zsp_answer: bool) {
         let Some(m) = self.motion.take() else { return };
         let end = m.end();
         if let Some((da, _)) = m.spindle(end) {
@@ -311,13 +317,15 @@ impl Exec<'_> {
             self.spindle.hold(end, angle);
             self.set_signal(Signal::Rgspp, false);
             self.set_signal(Signal::Rgspm, false);
-            let zsp = self.cfg.plc.zsp_us;
-            self.plc.answer(
-                self.now,
-                zsp,
-                crate::input::PlcAnswer::ZeroSpeed,
-                super::plc::PlcAction::ZeroSpeed,
-            );
+            if zsp_answer {
+                let zsp = self.cfg.plc.zsp_us;
+                self.plc.answer(
+                    self.now,
+                    zsp,
+                    crate::input::PlcAnswer::ZeroSpeed,
+                    super::plc::PlcAction::ZeroSpeed,
+                );
+            }
         }
         if self.machine_lock {
             for i in 0..AXES {
