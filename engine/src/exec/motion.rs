@@ -67,8 +67,11 @@ pub struct Motion {
     pub t0: Micros,
     /// Command positions at the start.
     pub start: Pos,
-    /// Command positions at the end.
+    /// Command positions at the end (where a stopped motion comes to rest).
     pub target: Pos,
+    /// The end of the path as planned: lines and arcs are interpolated towards it, also after a
+    /// stop has made `target` a point on the way.
+    pub path_end: Pos,
     /// Geometry and timing.
     pub path: Path,
 }
@@ -160,14 +163,14 @@ impl Motion {
             Path::Line { profile, len } => {
                 let f = if *len > 0.0 { profile.eval(dt).0 / len } else { 1.0 };
                 for i in 0..AXES {
-                    p[i] = m.start[i] + ((m.target[i] - m.start[i]) as f64 * f).round() as Nm;
+                    p[i] = m.start[i] + ((m.path_end[i] - m.start[i]) as f64 * f).round() as Nm;
                 }
             }
             Path::Arc { profile, len, center, radius, radius_end, a0, sweep, plane } => {
                 let f = profile.eval(dt).0 / len.max(1.0);
                 let (i0, i1, _) = plane.axes();
                 for i in 0..AXES {
-                    p[i] = m.start[i] + ((m.target[i] - m.start[i]) as f64 * f).round() as Nm;
+                    p[i] = m.start[i] + ((m.path_end[i] - m.start[i]) as f64 * f).round() as Nm;
                 }
                 let a = a0 + sweep * f;
                 let r = radius + (radius_end - radius) * f;
@@ -181,5 +184,34 @@ impl Motion {
             }
         }
         p
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stopped_line_decelerates_along_its_path_and_rests_on_it() {
+        // COM-INP-02: 20 mm along Z at 20 mm/s (20 nm/µs) with 1000 mm/s² (1e-3 nm/µs²).
+        let (v, a) = (20.0, 1e-3);
+        let len = 20e6;
+        let mut target = [0; AXES];
+        target[2] = -20_000_000;
+        let path = Path::Line { profile: Profile::trapezoid(len, v, a, 1000), len };
+        let mut m = Motion { t0: 0, start: [0; AXES], target, path_end: target, path };
+        let before = m.pos(300_000)[2];
+        m.stop_at(300_000, a, 1000);
+        // From 20 mm/s at 1000 mm/s² the stop takes 20 ms and 0.2 mm.
+        assert_eq!(m.end(), 320_000);
+        assert_eq!(m.pos(300_000)[2], before);
+        let mut last = before;
+        for t in (300_000..=320_000).step_by(1000) {
+            let z = m.pos(t)[2];
+            assert!(z <= last && z >= m.target[2], "{t}: {z}");
+            last = z;
+        }
+        assert_eq!(m.target[2], last);
+        assert!((m.target[2] - (before - 200_000)).abs() <= 1, "{}", m.target[2]);
     }
 }

@@ -289,7 +289,7 @@ impl Exec<'_> {
     }
 
     fn start_motion(&mut self, target: Pos, path: Path) {
-        let m = Motion { t0: self.now, start: self.cmd, target, path };
+        let m = Motion { t0: self.now, start: self.cmd, target, path_end: target, path };
         if m.duration() == 0 {
             self.cmd = target;
             return;
