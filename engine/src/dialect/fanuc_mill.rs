@@ -50,7 +50,7 @@ pub static PARAMS: &[ParamDef] = &[
     num("nc.period_us", "interpolation period", Int, 1000.0, 8000.0, 1000.0, "us", "Interpolation period: 1000, 2000, 4000 or 8000."),
     num("nc.increment_nm", "least input increment", Int, 100.0, 1000.0, 1000.0, "nm", "1000 (IS-B, 0.001 mm) or 100 (IS-C)."),
     num("nc.spindle_ramp_ms", "spindle time constant", Int, 0.0, 20000.0, 1000.0, "ms", "Time from 0 to the maximum spindle speed."),
-    num("nc.orient_ms", "orientation time", Int, 0.0, 20000.0, 500.0, "ms", "Spindle orientation (M19) time."),
+    num("nc.orient_ms", "orientation time", Int, 0.0, 20000.0, 500.0, "ms", "Spindle orientation (M19) time: its FIN comes then, or when the spindle is at rest if later (0: instant)."),
     num("nc.tool_change_ms", "tool change time", Int, 0.0, 60000.0, 2000.0, "ms", "M06: strobe to FIN."),
     num("plc.fin_ms", "FIN delay", Int, 0.0, 10000.0, 16.0, "ms", "Strobe to FIN."),
     num("plc.fin_fall_ms", "FIN fall delay", Int, 0.0, 10000.0, 8.0, "ms", "Strobe falling to FIN falling."),

@@ -19,6 +19,9 @@ pub struct Spindle {
     pub target: f64,
     /// Acceleration, rpm/µs (> 0; infinite: no ramp).
     pub accel: f64,
+    /// The deceleration of this segment when it is not `accel` (an orientation landing on its
+    /// angle), rpm/µs.
+    pub seg_accel: Option<f64>,
     /// Position (rigid tapping) mode.
     pub position_mode: bool,
     /// Stalled: does not turn whatever is commanded.
@@ -28,7 +31,16 @@ pub struct Spindle {
 impl Spindle {
     /// Stopped at angle 0.
     pub fn new(accel: f64) -> Spindle {
-        Spindle { t0: 0, angle0: 0.0, rpm0: 0.0, target: 0.0, accel, position_mode: false, stalled: false }
+        Spindle {
+            t0: 0,
+            angle0: 0.0,
+            rpm0: 0.0,
+            target: 0.0,
+            accel,
+            seg_accel: None,
+            position_mode: false,
+            stalled: false,
+        }
     }
 
     /// Angle (deg, unwrapped) and speed (rpm) at `t` in velocity mode.
@@ -38,13 +50,14 @@ impl Spindle {
         }
         let dt = t.saturating_sub(self.t0) as f64;
         let dv = self.target - self.rpm0;
-        let ramp = if self.accel.is_finite() && self.accel > 0.0 { dv.abs() / self.accel } else { 0.0 };
+        let accel = self.seg_accel.unwrap_or(self.accel);
+        let ramp = if accel.is_finite() && accel > 0.0 { dv.abs() / accel } else { 0.0 };
         if dt >= ramp {
             let a_ramp = 0.5 * (self.rpm0 + self.target) * ramp;
             let angle = self.angle0 + (a_ramp + self.target * (dt - ramp)) * DEG_PER_US_PER_RPM;
             (angle, self.target)
         } else {
-            let a = dv.signum() * self.accel;
+            let a = dv.signum() * accel;
             let rpm = self.rpm0 + a * dt;
             let angle = self.angle0 + (self.rpm0 * dt + 0.5 * a * dt * dt) * DEG_PER_US_PER_RPM;
             (angle, rpm)
@@ -58,6 +71,38 @@ impl Spindle {
         self.angle0 = angle;
         self.rpm0 = now;
         self.target = rpm;
+        self.seg_accel = None;
+    }
+
+    /// Orientation (M19) from `t`: a turning spindle decelerates at its own acceleration, a little
+    /// less where needed, so as to come to rest exactly on the next whole turn in its direction
+    /// of rotation; a spindle at rest (or `orient_us` 0: an instant orientation) is put on the
+    /// next whole turn at once. Returns when the orientation is complete: `orient_us` after `t`,
+    /// or when the spindle has come to rest if that is later.
+    pub fn orient(&mut self, t: Micros, orient_us: Micros) -> Micros {
+        let (angle, rpm) = self.at(t);
+        let whole = |a: f64| (a / 360.0).ceil() * 360.0;
+        if rpm == 0.0 || orient_us == 0 {
+            self.hold(t, whole(angle));
+            return t + orient_us;
+        }
+        // Speed in deg/µs; the natural stopping distance at the spindle's own acceleration.
+        let v = rpm.abs() * DEG_PER_US_PER_RPM;
+        let a = self.accel * DEG_PER_US_PER_RPM;
+        let natural = if a.is_finite() && a > 0.0 { v * v / (2.0 * a) } else { 0.0 };
+        let stop = if rpm > 0.0 { whole(angle + natural) } else { -whole(-(angle - natural)) };
+        let d = (stop - angle).abs();
+        if d < 1e-9 {
+            self.hold(t, stop);
+            return t + orient_us;
+        }
+        self.t0 = t;
+        self.angle0 = angle;
+        self.rpm0 = rpm;
+        self.target = 0.0;
+        self.seg_accel = Some(v * v / (2.0 * d) / DEG_PER_US_PER_RPM);
+        let rest = t + (2.0 * d / v).ceil() as Micros;
+        rest.max(t + orient_us)
     }
 
     /// Puts the spindle at rest at `angle` from `t` (end of a tapping stroke, orientation).
@@ -66,15 +111,17 @@ impl Spindle {
         self.angle0 = angle;
         self.rpm0 = 0.0;
         self.target = 0.0;
+        self.seg_accel = None;
     }
 
     /// When the present ramp ends (the speed is steady from then on).
     pub fn ramp_end(&self) -> Micros {
         let dv = (self.target - self.rpm0).abs();
-        if dv == 0.0 || !self.accel.is_finite() || self.accel <= 0.0 {
+        let accel = self.seg_accel.unwrap_or(self.accel);
+        if dv == 0.0 || !accel.is_finite() || accel <= 0.0 {
             self.t0
         } else {
-            self.t0 + (dv / self.accel).ceil() as Micros
+            self.t0 + (dv / accel).ceil() as Micros
         }
     }
 }
@@ -94,6 +141,38 @@ mod tests {
         assert_eq!(rpm, 1000.0);
         assert!((angle / 360.0 - 25.0).abs() < 1e-9, "{angle}");
         assert_eq!(s.ramp_end(), 1_000_000);
+    }
+
+    #[test]
+    fn orientation_decelerates_onto_the_next_whole_turn() {
+        // 0 → 1000 rpm in 100 ms (0.01 rpm/µs, 300°); 1.666 ms later at 1000 rpm (6°/ms) the
+        // spindle is at 310°. Its natural stop (100 ms, 300°) would end at 610°: it lands on 720°
+        // instead, decelerating a little more gently over 410°.
+        let mut s = Spindle::new(0.01);
+        s.command(0, 1000.0);
+        let t = 100_000 + 1_666;
+        let (a0, _) = s.at(t);
+        let done = s.orient(t, 500_000);
+        assert_eq!(done, t + 500_000);
+        let (a, rpm) = s.at(t + 2_000);
+        assert!(rpm > 0.0 && rpm < 1000.0 && a > a0, "{rpm} {a}");
+        let rest = s.ramp_end();
+        assert!(rest > t && rest <= done, "{rest}");
+        let (a, rpm) = s.at(rest);
+        assert_eq!(rpm, 0.0);
+        assert!((a - 720.0).abs() < 1e-6, "{a0} -> {a}");
+        // Slower than its own acceleration allows, never faster.
+        assert!(s.seg_accel.unwrap() <= 0.01);
+        // In reverse it lands on the whole turn below; at rest it goes there at once.
+        let mut r = Spindle::new(0.01);
+        r.command(0, -1000.0);
+        r.orient(200_000, 500_000);
+        let (a, _) = r.at(r.ramp_end());
+        assert!((a / 360.0 - (a / 360.0).round()).abs() < 1e-9 && a < -900.0, "{a}");
+        let mut z = Spindle::new(0.01);
+        z.hold(0, 10.0);
+        assert_eq!(z.orient(0, 500_000), 500_000);
+        assert_eq!(z.at(1).0, 360.0);
     }
 
     #[test]

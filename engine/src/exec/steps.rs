@@ -345,15 +345,16 @@ impl Exec<'_> {
         };
         let max = self.cfg.spindle_max_rpm as f64;
         let speed = (self.s_cmd as f64 * self.spindle_override as f64 / 100.0).min(max);
+        let mut orient_fin = 0;
         match effect {
             SpindleEffect::None => {}
             SpindleEffect::Forward => self.spindle.command(now, speed),
             SpindleEffect::Reverse => self.spindle.command(now, -speed),
             SpindleEffect::Stop => self.spindle.command(now, 0.0),
             SpindleEffect::Orient => {
-                let (a, _) = self.spindle.at(now);
-                let a = (a / 360.0).ceil() * 360.0;
-                self.spindle.hold(now + self.cfg.orient_us, a);
+                // FIN comes when the orientation is complete (FAN-LEX-06).
+                let done = self.spindle.orient(now, self.cfg.orient_us);
+                orient_fin = done - now;
             }
             SpindleEffect::Speed(s) => {
                 self.s_cmd = s;
@@ -371,7 +372,7 @@ impl Exec<'_> {
         let fin = if letter == 'M' && code == 6 && self.cfg.tool_change_us > 0 {
             self.cfg.tool_change_us
         } else {
-            self.cfg.plc.fin_us
+            self.cfg.plc.fin_us.max(orient_fin)
         };
         self.plc.strobe(now, fin);
         self.active = Active::Await { signal: Signal::Fin, value: true, then: AfterAwait::EndStrobe(strobe) };

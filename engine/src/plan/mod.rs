@@ -57,7 +57,7 @@ pub enum SpindleEffect {
     Reverse,
     /// M05: stop.
     Stop,
-    /// M19 / reference return: stop at angle 0.
+    /// M19: orient, coming to rest on a whole turn (angle 0); FIN when complete.
     Orient,
     /// S word: new commanded speed, rpm.
     Speed(u32),
