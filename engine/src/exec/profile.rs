@@ -3,6 +3,14 @@
 
 use crate::units::{ceil_to, Micros};
 
+mod follow;
+pub use follow::Ramp;
+
+/// Most pieces a profile has (a feed following an accelerating spindle has the most).
+const MAX_PIECES: usize = 16;
+
+const NO_PIECE: Piece = Piece { t0: 0.0, s0: 0.0, v0: 0.0, a: 0.0 };
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Piece {
     t0: f64,
@@ -14,7 +22,7 @@ struct Piece {
 /// Distance travelled (nm, ≥ 0) against time since the motion started (µs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Profile {
-    pieces: [Piece; 3],
+    pieces: [Piece; MAX_PIECES],
     n: usize,
     /// Total distance, nm.
     pub dist: f64,
@@ -52,21 +60,16 @@ impl Profile {
         let acc = if ta > 0.0 { v / ta } else { 0.0 };
         let d1 = 0.5 * v * ta;
         let d2 = d1 + v * tc;
-        Profile {
-            pieces: [
-                Piece { t0: 0.0, s0: 0.0, v0: 0.0, a: acc },
-                Piece { t0: ta, s0: d1, v0: v, a: 0.0 },
-                Piece { t0: ta + tc, s0: d2, v0: v, a: -acc },
-            ],
-            n: 3,
-            dist,
-            total,
-        }
+        let mut pieces = [NO_PIECE; MAX_PIECES];
+        pieces[0] = Piece { t0: 0.0, s0: 0.0, v0: 0.0, a: acc };
+        pieces[1] = Piece { t0: ta, s0: d1, v0: v, a: 0.0 };
+        pieces[2] = Piece { t0: ta + tc, s0: d2, v0: v, a: -acc };
+        Profile { pieces, n: 3, dist, total }
     }
 
     /// A motion that does not move.
     pub fn still() -> Profile {
-        Profile { pieces: [Piece { t0: 0.0, s0: 0.0, v0: 0.0, a: 0.0 }; 3], n: 1, dist: 0.0, total: 0 }
+        Profile { pieces: [NO_PIECE; MAX_PIECES], n: 1, dist: 0.0, total: 0 }
     }
 
     /// Distance and speed (nm, nm/µs) at `t` µs after the start.
@@ -96,7 +99,9 @@ impl Profile {
         let total = ceil_to(((v0 / a).ceil() as Micros).max(1), period.max(1));
         let a = v0 / total as f64;
         let dist = (s0 + 0.5 * v0 * total as f64).min(self.dist);
-        Profile { pieces: [Piece { t0: 0.0, s0, v0, a: -a }; 3], n: 1, dist, total }
+        let mut pieces = [NO_PIECE; MAX_PIECES];
+        pieces[0] = Piece { t0: 0.0, s0, v0, a: -a };
+        Profile { pieces, n: 1, dist, total }
     }
 
     fn offset(mut self, s0: f64) -> Profile {

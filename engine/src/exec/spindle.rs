@@ -114,6 +114,18 @@ impl Spindle {
         self.seg_accel = None;
     }
 
+    /// The speed ramp under way at `t` (signed speed now, signed acceleration rpm/µs, time left
+    /// µs), or None when the speed is steady (or the spindle stalled).
+    pub fn ramp(&self, t: Micros) -> Option<super::profile::Ramp> {
+        let accel = self.seg_accel.unwrap_or(self.accel);
+        let (_, rpm) = self.at(t);
+        let dv = self.target - rpm;
+        if self.stalled || dv == 0.0 || !accel.is_finite() || accel <= 0.0 {
+            return None;
+        }
+        Some(super::profile::Ramp { rpm0: rpm, slope: dv.signum() * accel, dur: dv.abs() / accel })
+    }
+
     /// When the present ramp ends (the speed is steady from then on).
     pub fn ramp_end(&self) -> Micros {
         let dv = (self.target - self.rpm0).abs();

@@ -62,9 +62,7 @@ impl Exec<'_> {
             Step::Rapid { target } => self.start_rapid(target),
             Step::Feed { target, feed } => {
                 let len = path_len(&self.cmd, &target);
-                if let Some(v) = self.feed_speed(feed) {
-                    let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
-                    let profile = Profile::trapezoid(len, v, a, self.cfg.period_us);
+                if let Some(profile) = self.feed_profile(len, feed) {
                     self.start_motion(target, Path::Line { profile, len });
                 }
             }
@@ -150,7 +148,8 @@ impl Exec<'_> {
         self.active = Active::Held;
     }
 
-    fn feed_speed(&mut self, feed: Feed) -> Option<f64> {
+    /// The profile of a cutting feed move of `len` nm (COM-MOT-02); None after raising 0011.
+    fn feed_profile(&mut self, len: f64, feed: Feed) -> Option<Profile> {
         let nm_per_min = match feed {
             Feed::PerMin(f) => f,
             Feed::PerRev(f) => f * self.spindle.at(self.now).1.abs(),
@@ -162,11 +161,26 @@ impl Exec<'_> {
         // In a tapping cycle (hold suppressed) feed override and dry run do not act (COM-MOT-07).
         let tapping = self.hold_suppressed;
         let ovr = if tapping { 100.0 } else { self.feed_override as f64 };
+        let dry = self.dry_run && !tapping;
         let mut v = nm_per_min * ovr / 100.0;
-        if self.dry_run && !tapping {
+        if dry {
             v = self.cfg.dry_run_nm_min * ovr / 100.0;
         }
-        Some(v.min(self.cfg.feed_max_nm_min) / 60e6)
+        let vmax = self.cfg.feed_max_nm_min / 60e6;
+        let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
+        // Per revolution while the spindle changes speed: F x the actual speed throughout.
+        if let (Feed::PerRev(f), false, Some(ramp)) = (feed, dry, self.spindle.ramp(self.now)) {
+            let per_rpm = f * ovr / 100.0 / 60e6;
+            let p = Profile::following(len, per_rpm, ramp, vmax, a, self.cfg.period_us);
+            if p.is_none() {
+                self.raise(Alarm::new(
+                    AlarmKind::FeedZero,
+                    "feed per revolution with the spindle stopping before the end of the move",
+                ));
+            }
+            return p;
+        }
+        Some(Profile::trapezoid(len, (v / 60e6).min(vmax), a, self.cfg.period_us))
     }
 
     fn start_rapid(&mut self, target: Pos) {
@@ -224,9 +238,7 @@ impl Exec<'_> {
         }
         let h = (target[i2] - s[i2]) as f64;
         let len = libm::hypot(0.5 * (radius + radius_end) * sweep.abs(), h);
-        if let Some(v) = self.feed_speed(feed) {
-            let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
-            let profile = Profile::trapezoid(len, v, a, self.cfg.period_us);
+        if let Some(profile) = self.feed_profile(len, feed) {
             self.start_motion(
                 target,
                 Path::Arc { profile, len, center: c, radius, radius_end, a0, sweep, plane },
