@@ -71,6 +71,41 @@ pub enum AlarmKind {
 }
 
 impl AlarmKind {
+    /// Every alarm kind, in declaration order.
+    pub const ALL: [AlarmKind; 31] = [
+        AlarmKind::ImproperGCode,
+        AlarmKind::FeedZero,
+        AlarmKind::IllegalSCode,
+        AlarmKind::FeedNotFoundRigid,
+        AlarmKind::PositionLsiOverflow,
+        AlarmKind::ProgramMissRigid,
+        AlarmKind::IllegalAxisOperation,
+        AlarmKind::RigidModeDiOff,
+        AlarmKind::CannotChangePlane,
+        AlarmKind::RigidDataMismatch,
+        AlarmKind::ExcessErrorStopped,
+        AlarmKind::ExcessErrorMoving,
+        AlarmKind::M29FeedbackTimeout,
+        AlarmKind::SpindleNotRotating,
+        AlarmKind::WordOutOfRange,
+        AlarmKind::WordMissing,
+        AlarmKind::UnsupportedGCode,
+        AlarmKind::NotModelled,
+        AlarmKind::IllegalWord,
+        AlarmKind::M29Repeated,
+        AlarmKind::AxisMoveAfterM29,
+        AlarmKind::ClampCodeMismatch,
+        AlarmKind::TapAxisChangedWithoutBottom,
+        AlarmKind::M29SharesBlock,
+        AlarmKind::RigidSignalOff,
+        AlarmKind::TooManyMCodes,
+        AlarmKind::SpindleNotTurning,
+        AlarmKind::FinTimeout,
+        AlarmKind::EmergencyStop,
+        AlarmKind::OverloadRetract,
+        AlarmKind::ParameterOutOfRange,
+    ];
+
     /// The alarm number as the trace writes it.
     pub fn code(self) -> &'static str {
         use AlarmKind::*;

@@ -21,6 +21,7 @@ pub mod alarm;
 pub mod dialect;
 pub mod exec;
 pub mod input;
+pub mod invariants;
 pub mod params;
 pub mod parse;
 pub mod plan;

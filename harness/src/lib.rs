@@ -7,11 +7,17 @@
 //! - [`jsonl`]: the JSON Lines trace writer (`docs/trace-format.md`);
 //! - [`params_yaml`]: parameter files (`docs/parameters-format.md`);
 //! - [`diag`]: input errors with their location, rendered with miette or as plain text;
-//! - [`render`]: event listings, ASCII timing diagrams and VCD files of a trace.
+//! - [`render`]: event listings, ASCII timing diagrams and VCD files of a trace;
+//! - [`scenario`]: scenario files, their expectations and verdicts;
+//! - [`campaign`]: generated cases (programs, parameters, inputs and faults), the invariants
+//!   every run must keep, and failures written back as scenario files;
+//! - [`fuzz`]: the logic of the cargo-fuzz targets, replayed by `cargo test`.
 
+pub mod campaign;
 pub mod cli;
 pub mod cli_scenario;
 pub mod diag;
+pub mod fuzz;
 pub mod jsonl;
 pub mod params_yaml;
 pub mod render;

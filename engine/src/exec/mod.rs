@@ -411,11 +411,9 @@ impl Exec<'_> {
         for i in 0..AXES {
             p[i] = cmd[i] - self.lock_offset[i];
         }
-        if self.machine_lock {
-            if let Some(m) = &self.motion {
-                for i in 0..AXES {
-                    p[i] = m.start[i] - self.lock_offset[i];
-                }
+        if let Some(m) = self.motion.as_ref().filter(|m| m.locked) {
+            for i in 0..AXES {
+                p[i] = m.start[i] - self.lock_offset[i];
             }
         }
         p
@@ -433,7 +431,7 @@ impl Exec<'_> {
     fn spindle_at(&self, t: Micros) -> (f64, f64) {
         if let Some(m) = &self.motion {
             if let Some((da, rpm)) = m.spindle(t) {
-                if self.machine_lock {
+                if m.locked {
                     return (self.spindle.angle0, 0.0);
                 }
                 if let Some(a) = self.stall_angle {

@@ -74,6 +74,9 @@ pub struct Motion {
     pub path_end: Pos,
     /// Geometry and timing.
     pub path: Path,
+    /// Machine lock was on when the motion started: the machine stays still for the whole motion
+    /// (COM-MOT-04). A lock switched during a motion acts from the next one (COM-INP-10).
+    pub locked: bool,
 }
 
 impl Motion {
@@ -199,7 +202,7 @@ mod tests {
         let mut target = [0; AXES];
         target[2] = -20_000_000;
         let path = Path::Line { profile: Profile::trapezoid(len, v, a, 1000), len };
-        let mut m = Motion { t0: 0, start: [0; AXES], target, path_end: target, path };
+        let mut m = Motion { t0: 0, start: [0; AXES], target, path_end: target, path, locked: false };
         let before = m.pos(300_000)[2];
         m.stop_at(300_000, a, 1000);
         // From 20 mm/s at 1000 mm/s² the stop takes 20 ms and 0.2 mm.

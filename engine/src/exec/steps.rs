@@ -301,7 +301,14 @@ impl Exec<'_> {
     }
 
     fn start_motion(&mut self, target: Pos, path: Path) {
-        let m = Motion { t0: self.now, start: self.cmd, target, path_end: target, path };
+        let m = Motion {
+            t0: self.now,
+            start: self.cmd,
+            target,
+            path_end: target,
+            path,
+            locked: self.machine_lock,
+        };
         if m.duration() == 0 {
             self.cmd = target;
             return;
@@ -323,7 +330,7 @@ impl Exec<'_> {
         if let Some((da, _)) = m.spindle(end) {
             let angle = match self.stall_angle.take() {
                 Some(a) => a,
-                None if self.machine_lock => self.spindle.angle0,
+                None if m.locked => self.spindle.angle0,
                 None => self.spindle.angle0 + da,
             };
             self.spindle.hold(end, angle);
@@ -339,7 +346,7 @@ impl Exec<'_> {
                 );
             }
         }
-        if self.machine_lock {
+        if m.locked {
             for i in 0..AXES {
                 self.lock_offset[i] += m.target[i] - m.start[i];
             }

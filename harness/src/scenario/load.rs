@@ -35,6 +35,8 @@ pub struct Scenario {
     pub expect: Expectations,
     /// The timing diagram to snapshot.
     pub diagram: DiagramSpec,
+    /// `expect.invariants`, if given.
+    pub invariants: Option<super::invariants::InvariantCheck>,
     /// The parser's refusal, when the scenario expects one (`expect.refused`): the program is
     /// then empty and the verdict compares this error with the expectation.
     pub refusal: Option<(Option<nc_engine::ParseError>, ExpectRefused, String)>,
@@ -113,6 +115,8 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
     };
     let expect = expect::resolve(&ctx, &file.expect, &rules[0])?;
     let diagram = diagram(&ctx, &file)?;
+    let invariants =
+        file.expect.invariants.as_ref().map(|i| super::invariants::resolve(&ctx, i)).transpose()?;
     Ok(Scenario {
         name: name.to_string(),
         title: file.title,
@@ -122,6 +126,7 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
         opts,
         expect,
         diagram,
+        invariants,
         refusal,
     })
 }

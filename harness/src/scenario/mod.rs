@@ -4,8 +4,10 @@
 //! - [`schema`]: the file format as serde types;
 //! - [`resolve`]: names in the file → engine values, with located errors;
 //! - [`load`]: a file → a runnable [`load::Scenario`];
-//! - [`run`]: trace and verdicts.
+//! - [`run`]: trace and verdicts;
+//! - [`invariants`]: `expect.invariants`, the engine's invariants on the scenario's run.
 pub mod expect;
+pub mod invariants;
 pub mod load;
 pub mod resolve;
 pub mod run;

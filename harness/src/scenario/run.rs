@@ -63,10 +63,13 @@ impl Outcome {
 /// Runs the scenario and evaluates its expectations.
 pub fn run(s: &Scenario) -> Outcome {
     let trace = s.machine.run_to_trace(&s.program, &s.opts);
-    let verdicts = match &s.refusal {
+    let mut verdicts = match &s.refusal {
         Some(r) => vec![refusal_verdict(s, r)],
         None => expect::evaluate(&s.expect, &trace),
     };
+    if let (Some(check), None) = (&s.invariants, &s.refusal) {
+        verdicts.extend(super::invariants::evaluate(check, &s.machine, &s.program, &s.opts));
+    }
     Outcome { trace, verdicts }
 }
 

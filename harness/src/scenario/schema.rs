@@ -250,6 +250,9 @@ pub struct Expect {
     /// The program must be refused by the parser (a syntax error), here.
     #[serde(default)]
     pub refused: Option<Spanned<ExpectRefused>>,
+    /// The engine's invariants (docs/invariants.md) must hold on this run.
+    #[serde(default)]
+    pub invariants: Option<Spanned<super::invariants::InvariantsSpec>>,
 }
 
 /// Where and why the parser must refuse the program.

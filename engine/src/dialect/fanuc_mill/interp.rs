@@ -316,7 +316,13 @@ impl FanucInterp {
             }
             if self.rigid.is_none() {
                 self.s = Some(s);
-                out.push(Step::Function { letter: 'S', code: s, effect: SpindleEffect::Speed(s) });
+                // The S of a block that starts rigid tapping (M29 S, or G84 S under 5200.0 = 1)
+                // is the tapping speed: it does not change the speed-mode rotation that reset
+                // returns to (FAN-RT-14, DEC-08).
+                let rigid_s =
+                    m29_here || (self.set.g84_rigid && g.cycle.is_some_and(|(c, _)| cycles::is_tap(c)));
+                let effect = if rigid_s { SpindleEffect::None } else { SpindleEffect::Speed(s) };
+                out.push(Step::Function { letter: 'S', code: s, effect });
             }
         }
         if let Some(t) = t {
