@@ -7,7 +7,8 @@
 //!
 //! Exit status: 0 when the program ran to its end (end reason `program_end`), 1 when the run
 //! ended any other way (an alarm, a reset, a stop, the time limit), 2 for errors in what was
-//! given (command line, unreadable or unparsable program, bad parameter file, unwritable output).
+//! given (command line, unreadable or unparsable program, bad parameter file, unwritable output),
+//! 3 with `--check-determinism` when two runs wrote different traces.
 
 use std::fs::File;
 use std::io::{self, Write};
@@ -19,6 +20,7 @@ use clap::{Args, Parser, Subcommand};
 use nc_engine::trace::EndReason;
 use nc_engine::{Machine, ParseError, RunOptions};
 
+use crate::determinism::{self, Digest};
 use crate::diag::{InputError, Span};
 use crate::jsonl::JsonlWriter;
 use crate::params_yaml;
@@ -48,6 +50,11 @@ pub enum Command {
     /// other way), 2 for errors in the input: an unreadable file, a parse error in the program, a
     /// bad parameter file.
     Run(RunArgs),
+    /// Run the property-based fault campaign (docs/invariants.md) for long, from fresh seeds,
+    /// with a progress bar and a coverage summary; failures become regression scenarios.
+    ///
+    /// Exits 0 when every case kept every invariant, 1 when one did not, 2 for bad arguments.
+    Campaign(crate::cli_campaign::CampaignArgs),
 }
 
 /// Arguments of `nc-conform run`.
@@ -80,6 +87,11 @@ pub struct RunArgs {
     /// Write the trace to this file instead of standard output.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+
+    /// Run twice and compare the two written traces byte for byte: exit 3 when they differ,
+    /// otherwise the usual exit status (the first run's output is written as usual).
+    #[arg(long)]
+    pub check_determinism: bool,
 }
 
 /// Entry point of the binary: parses the command line, runs, and returns the exit status.
@@ -87,6 +99,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Run(args) => ExitCode::from(run(&args)),
+        Command::Campaign(args) => ExitCode::from(crate::cli_campaign::run(&args)),
     }
 }
 
@@ -140,19 +153,32 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
         None => (Box::new(io::stdout().lock()), "standard output".to_string()),
     };
     let opts = RunOptions { sample_us: args.sample_us, ..RunOptions::default() };
-    let mut writer = JsonlWriter::new(sink);
+    let mut writer = JsonlWriter::new(Digest::new(Some(sink)));
     machine.run(&program, &opts, &mut writer);
     let end = writer.end_reason().cloned();
-    match writer.finish() {
-        Ok(_) => {}
+    let first = match writer.finish() {
+        Ok(d) => d.summary(),
         // A reader that stopped early (`| head`) is not an error of the run.
-        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => {}
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => return Ok(exit_of(end)),
         Err(e) => return Err(InputError::new(dest, format!("cannot write the trace: {e}"))),
+    };
+    if args.check_determinism {
+        let mut again = JsonlWriter::new(Digest::<io::Sink>::new(None));
+        machine.run(&program, &opts, &mut again);
+        let second = again.finish().map(|d| d.summary()).unwrap_or_default();
+        if second != first {
+            eprintln!("{program_name}: {}", determinism::report(first, second));
+            return Ok(determinism::EXIT_NONDETERMINISTIC);
+        }
     }
-    Ok(match end {
+    Ok(exit_of(end))
+}
+
+fn exit_of(end: Option<EndReason>) -> u8 {
+    match end {
         Some(EndReason::ProgramEnd) => EXIT_OK,
         _ => EXIT_RUN_FAILED,
-    })
+    }
 }
 
 /// A path as the user wrote it.

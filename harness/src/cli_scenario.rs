@@ -1,16 +1,27 @@
 //! `nc-conform run SCENARIO.yaml`: runs a scenario and prints its verdicts (exit 0 when every
-//! expectation holds, 1 when one fails, 2 for input errors), or with `--format` writes the trace
-//! as JSON Lines, VCD or the timing diagram.
+//! expectation holds, 1 when one fails, 2 for input errors, 3 with `--check-determinism` when two
+//! runs differ), or with `--format` writes the trace as JSON Lines, VCD or the timing diagram.
 
 use std::fs::File;
 use std::io::{self, Write};
 use std::path::Path;
 
 use crate::cli::{display_name, RunArgs, EXIT_OK, EXIT_RUN_FAILED};
+use crate::determinism::{self, Digest};
 use crate::diag::InputError;
 use crate::jsonl::JsonlWriter;
 use crate::render::{timing::timing_diagram, vcd::write_vcd};
 use crate::scenario::{load, run};
+
+/// The digest of a trace written as JSON Lines.
+fn jsonl_digest(trace: &nc_engine::Trace) -> (u64, u64, u64) {
+    let mut w = JsonlWriter::new(Digest::<io::Sink>::new(None));
+    w.write_meta(&trace.meta);
+    for e in &trace.events {
+        w.write_event(e);
+    }
+    w.finish().map(|d| d.summary()).unwrap_or_default()
+}
 
 /// Whether the file is a scenario (by its extension).
 pub fn is_scenario(path: &Path) -> bool {
@@ -38,6 +49,13 @@ pub fn run(args: &RunArgs) -> Result<u8, InputError> {
     };
     let outcome = run::run(&s);
     let code = if outcome.passed() { EXIT_OK } else { EXIT_RUN_FAILED };
+    if args.check_determinism {
+        let (a, b) = (jsonl_digest(&outcome.trace), jsonl_digest(&run::run(&s).trace));
+        if a != b {
+            eprintln!("{name}: {}", determinism::report(a, b));
+            return Ok(determinism::EXIT_NONDETERMINISTIC);
+        }
+    }
     let (mut out, dest): (Box<dyn Write>, String) = match &args.out {
         Some(path) => {
             let f = File::create(path)

@@ -4,6 +4,7 @@
 //! fault-injection runs and comparisons with recorded controller traces.
 //!
 //! - [`cli`]: the `nc-conform` command line;
+//! - [`determinism`]: `run --check-determinism`;
 //! - [`jsonl`]: the JSON Lines trace writer (`docs/trace-format.md`);
 //! - [`params_yaml`]: parameter files (`docs/parameters-format.md`);
 //! - [`diag`]: input errors with their location, rendered with miette or as plain text;
@@ -15,7 +16,9 @@
 
 pub mod campaign;
 pub mod cli;
+pub mod cli_campaign;
 pub mod cli_scenario;
+pub mod determinism;
 pub mod diag;
 pub mod fuzz;
 pub mod jsonl;

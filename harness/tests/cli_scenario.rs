@@ -107,3 +107,36 @@ fn dialect_flag_is_refused_for_a_scenario() {
     let o = run(&p, &["--dialect", "gsk-lathe"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn campaign_runs_reports_coverage_and_exits_0() {
+    // issue 4: `nc-conform campaign` (what scripts/campaign runs) prints the seed, the cases, the
+    // alarms hit and the reached situations; a clean engine exits 0.
+    let dir = std::env::temp_dir().join(format!("nc-campaign-{}", std::process::id()));
+    let out = Command::new(BIN)
+        .args([
+            "campaign",
+            "--cases",
+            "4",
+            "--seed",
+            "5",
+            "--quiet",
+            "--property",
+            "range_edges_alarm_without_motion",
+        ])
+        .args(["--regressions", &dir.to_string_lossy()])
+        .output()
+        .expect("run");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    for want in ["from seed 5", "4 cases", "alarms hit:", "reached:", "target situations"] {
+        assert!(text.contains(want), "`{want}` missing from:\n{text}");
+    }
+    assert!(!dir.exists(), "no regression written without a failure");
+}
+
+#[test]
+fn campaign_refuses_zero_cases_with_exit_2() {
+    let out = Command::new(BIN).args(["campaign", "--cases", "0"]).output().expect("run");
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -5,13 +5,15 @@
 //! - [`case`]: a generated case and how it becomes a program, parameters and inputs;
 //! - [`strategy`]: proptest strategies, and the operator panel as a proptest-state-machine model;
 //! - [`oracle`]: running a case and checking the invariants;
-//! - [`regression`]: a failing case as a scenario file.
+//! - [`regression`]: a failing case as a scenario file;
+//! - [`properties`]: the named properties that `cargo test` and `nc-conform campaign` run.
 //!
 //! One seed decides a whole property run: the failure message prints it with the command that
 //! replays it, and the scenario file replays the minimal case without any seed.
 
 pub mod case;
 pub mod oracle;
+pub mod properties;
 pub mod regression;
 pub mod strategy;
 
