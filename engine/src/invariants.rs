@@ -398,13 +398,16 @@ pub fn machine_lock_still(trace: &Trace) -> Option<Violation> {
 }
 
 /// INV-08: a reset that acts while F76.3 = 1 leaves F76.3 and RGTAP at 0 at the end; when the run
-/// ends on that reset and the pre-M29 speed is known, the final spindle speed is that speed.
+/// ends on that reset, the pre-M29 speed is known and the spindle is not stalled, the final
+/// spindle speed is that speed.
 pub fn reset_restores_spindle(trace: &Trace, pre_m29_mrpm: Option<i64>) -> Option<Violation> {
     let inv = Invariant::ResetRestoresSpindle;
     let mut w = Walk::new(trace);
     let mut reset_at = None;
+    let mut stalled = false;
     while let Some((t, ev)) = w.next() {
         match ev {
+            Event::Input { name, value } if name == "spindle_stall" => stalled = value == "on",
             Event::Input { name, .. } if name == "reset" && w.signals.get(Signal::Rtap) => {
                 reset_at.get_or_insert(t);
             }
@@ -418,7 +421,8 @@ pub fn reset_restores_spindle(trace: &Trace, pre_m29_mrpm: Option<i64>) -> Optio
         return violation(inv, t, "F76.3 or RGTAP still 1 at the end after a reset in rigid tapping".into());
     }
     match pre_m29_mrpm {
-        Some(want) if end.reason.name() == "reset" && end.state.spindle_mrpm != want => violation(
+        // A stalled spindle cannot turn back (COM-INP-09): only the signals are checked then.
+        Some(want) if end.reason.name() == "reset" && !stalled && end.state.spindle_mrpm != want => violation(
             inv,
             t,
             format!("spindle {} mrpm at the end, {} mrpm before M29", end.state.spindle_mrpm, want),
