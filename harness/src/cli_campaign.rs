@@ -115,6 +115,8 @@ pub fn run(args: &CampaignArgs) -> u8 {
                 }
                 Err(f) => {
                     bar.println(format!("{f}"));
+                    all.merge(&f.stats);
+                    per_property.entry(p.name).or_default().merge(&f.stats);
                     failures.push(f);
                 }
             }

@@ -82,6 +82,8 @@ pub struct Failure {
     pub yaml: String,
     /// Where the scenario was written, if it could be.
     pub path: Option<PathBuf>,
+    /// What the cases before the failure covered.
+    pub stats: Stats,
 }
 
 impl std::fmt::Display for Failure {
@@ -181,6 +183,7 @@ pub fn run_property<S: Strategy>(
                 violations,
                 yaml,
                 path,
+                stats: stats.into_inner(),
             }))
         }
         Err(TestError::Abort(why)) => {
@@ -196,6 +199,7 @@ pub fn run_property<S: Strategy>(
                 violations,
                 yaml: String::new(),
                 path: None,
+                stats: stats.into_inner(),
             }))
         }
     }
