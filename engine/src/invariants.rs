@@ -422,11 +422,13 @@ pub fn reset_restores_spindle(trace: &Trace, pre_m29_mrpm: Option<i64>) -> Optio
     }
     match pre_m29_mrpm {
         // A stalled spindle cannot turn back (COM-INP-09): only the signals are checked then.
-        Some(want) if end.reason.name() == "reset" && !stalled && end.state.spindle_mrpm != want => violation(
-            inv,
-            t,
-            format!("spindle {} mrpm at the end, {} mrpm before M29", end.state.spindle_mrpm, want),
-        ),
+        Some(want) if end.reason.name() == "reset" && !stalled && end.state.spindle_mrpm != want => {
+            violation(
+                inv,
+                t,
+                format!("spindle {} mrpm at the end, {} mrpm before M29", end.state.spindle_mrpm, want),
+            )
+        }
         _ => None,
     }
 }
