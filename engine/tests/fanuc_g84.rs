@@ -104,6 +104,7 @@ fn fan_rt_lead_is_f_over_s_and_stays_synchronised() {
 #[case::plane_change("G90 G0 Z50\nM29 S100\nG84 Z-5 R2 F100\nG18\n", "0206")]
 #[case::feed_zero("G90 G0 Z50\nG1 X10 F0\n", "0011")]
 #[case::improper_g("G90 G0 Z50\nG7 X1\n", "0010")]
+#[case::g_number_beyond_i64_tenths("G90 G0 Z50\nG998888888888888888\n", "0010")] // found by fuzzing
 fn fan_rt_documented_alarms(#[case] text: &str, #[case] code: &str) {
     let t = run_default("fanuc-mill", text);
     let codes: Vec<_> = t.alarms().map(|(_, a)| a.kind.code()).collect();

@@ -74,7 +74,7 @@ impl<'a> Words<'a> {
                 'G' => {
                     let v = word.value;
                     let tenths = v.scaled(10);
-                    if v.mantissa < 0 || v.scaled(1000) != tenths * 100 || tenths > 9999 {
+                    if v.mantissa < 0 || tenths > 9999 || v.scaled(1000) != tenths * 100 {
                         return Err(w.alarm(AlarmKind::ImproperGCode, word, format!("G{}", v.display())));
                     }
                     w.g.push((tenths as u32, *word));

@@ -108,6 +108,14 @@ impl Exec<'_> {
                 }
             }
             Step::Tap(t) => self.start_tap(t),
+            Step::More(m) => {
+                // The next chunk of a peck cycle, planned now that the run has got there.
+                let mut next = Vec::new();
+                m.expand(&mut next);
+                for s in next.into_iter().rev() {
+                    self.steps.push_front(s);
+                }
+            }
             Step::HoldSuppress(b) => {
                 self.hold_suppressed = b;
                 if !b && self.hold_pending {

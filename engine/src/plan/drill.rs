@@ -14,7 +14,7 @@
 //!   tool rapids out after the dwell and spindle stop;
 //! - G86, G88 and G76 restart the spindle in the direction it had before the cycle.
 
-use crate::plan::{Feed, Pos, SpindleEffect, Step};
+use crate::plan::{Feed, More, Pos, SpindleEffect, Step, PECKS_PER_CHUNK};
 use crate::trace::Phase;
 use crate::units::{Micros, Nm};
 
@@ -124,23 +124,7 @@ pub fn drill(c: &DrillCycle, out: &mut Vec<Step>) {
             out.push(rapid_to(0));
         }
         DrillKind::DeepPeck | DrillKind::HighSpeedPeck => {
-            let deep = c.kind == DrillKind::DeepPeck;
-            // The dialect refuses q <= 0 (FAN-CYC-13); should one come anyway, one cut to the bottom.
-            let q = if c.q > 0 { c.q } else { Nm::MAX / 4 };
-            let mut reached: Nm = 0;
-            loop {
-                out.push(Step::Phase(Phase::Cutting));
-                if deep && reached > 0 {
-                    out.push(rapid_to((reached - c.d).max(0)));
-                }
-                reached = (reached + q).min(depth);
-                out.push(feed_to(reached));
-                if reached >= depth {
-                    break;
-                }
-                out.push(Step::Phase(Phase::Retract));
-                out.push(rapid_to(if deep { 0 } else { (reached - c.d).max(0) }));
-            }
+            pecks(c, 0, out);
             dwell(out);
             out.push(Step::Phase(Phase::Retract));
             out.push(rapid_to(0));
@@ -189,6 +173,36 @@ pub fn drill(c: &DrillCycle, out: &mut Vec<Step>) {
             out.push(Step::HoldSuppress(false));
         }
     }
+}
+
+/// Appends the pecks of a G73 / G83 hole from depth `reached` (below R) to the bottom: at most
+/// [`PECKS_PER_CHUNK`] cuts, the rest as a [`Step::More`].
+pub(crate) fn pecks(c: &DrillCycle, mut reached: Nm, out: &mut Vec<Step>) {
+    let r = c.at_r[c.axis];
+    let dir: Nm = if c.bottom >= r { 1 } else { -1 };
+    let depth = (c.bottom - r).abs();
+    let at = |reached: Nm| {
+        let mut p = c.at_r;
+        p[c.axis] = r + dir * reached;
+        p
+    };
+    let deep = c.kind == DrillKind::DeepPeck;
+    // The dialect refuses q <= 0 (FAN-CYC-13); should one come anyway, one cut to the bottom.
+    let q = if c.q > 0 { c.q } else { Nm::MAX / 4 };
+    for _ in 0..PECKS_PER_CHUNK {
+        out.push(Step::Phase(Phase::Cutting));
+        if deep && reached > 0 {
+            out.push(Step::Rapid { target: at((reached - c.d).max(0)) });
+        }
+        reached = reached.saturating_add(q).min(depth);
+        out.push(Step::Feed { target: at(reached), feed: c.feed });
+        if reached >= depth {
+            return;
+        }
+        out.push(Step::Phase(Phase::Retract));
+        out.push(Step::Rapid { target: at(if deep { 0 } else { (reached - c.d).max(0) }) });
+    }
+    out.push(Step::More(Box::new(More::Drill { cycle: *c, reached })));
 }
 
 #[cfg(test)]
@@ -275,6 +289,30 @@ mod tests {
             story(&v).join(" "),
             "[cutting] F-3 [retract] R-2 [cutting] F-8 [retract] R-7 [cutting] F-10 [retract] R2"
         );
+    }
+
+    #[test]
+    fn many_pecks_expand_to_the_same_story_as_few() {
+        // 12 mm at q = 0.1 mm: 120 cuts, planned a chunk at a time; expanded, each G83 peck
+        // comes back to 1 mm short of the depth reached and cuts 0.1 mm deeper.
+        let mut c = cycle(DrillKind::DeepPeck);
+        c.q = MM / 10;
+        let mut v = Vec::new();
+        drill(&c, &mut v);
+        assert!(v.iter().any(|s| matches!(s, Step::More(_))));
+        let all = crate::plan::expand_all(v);
+        let feeds: Vec<Nm> = all
+            .iter()
+            .filter_map(|s| match s {
+                Step::Feed { target, .. } => Some(target[2]),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(feeds.len(), 120);
+        for (k, z) in feeds.iter().enumerate() {
+            assert_eq!(*z, 2 * MM - (k as Nm + 1) * MM / 10);
+        }
+        assert_eq!(story(&all[all.len() - 4..]).join(" "), "[dwell] D500000 [retract] R2");
     }
 
     #[test]

@@ -175,4 +175,61 @@ pub enum Step {
     End,
     /// Raise an alarm at this point of the execution and stop.
     Alarm(Alarm),
+    /// The rest of a peck cycle, expanded into its steps when the executor reaches it (see
+    /// [`More`]).
+    More(Box<More>),
+}
+
+/// Most pecks a cycle builder plans at once: a hole of more pecks ends its first chunk with a
+/// [`Step::More`] that the executor expands into the next chunk when it gets there. A peck
+/// cycle can take millions of pecks (a deep hole with a tiny Q), and a run's cost must grow with
+/// the events it reaches, never with what it has not reached yet (found by fuzzing: a GSK
+/// `G84 Z2500 Q5` planned 500 000 pecks before its first stroke).
+pub const PECKS_PER_CHUNK: usize = 16;
+
+/// The pecks of a cycle still to plan: the cycle and the depth reached so far.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum More {
+    /// Rigid tapping pecks.
+    RigidTap {
+        /// The hole.
+        cycle: rigid_tap::RigidTap,
+        /// Depth below the start level reached so far, nm.
+        reached: Nm,
+    },
+    /// Drilling pecks (G73, G83).
+    Drill {
+        /// The hole.
+        cycle: drill::DrillCycle,
+        /// Depth below R reached so far, nm.
+        reached: Nm,
+    },
+}
+
+impl More {
+    /// Appends the next chunk of pecks (ending with another [`Step::More`] when pecks remain).
+    pub fn expand(&self, out: &mut Vec<Step>) {
+        match self {
+            More::RigidTap { cycle, reached } => rigid_tap::pecks(cycle, *reached, out),
+            More::Drill { cycle, reached } => drill::pecks(cycle, *reached, out),
+        }
+    }
+}
+
+/// `steps` with every [`Step::More`] expanded, recursively: the whole plan (for tests and tools
+/// that look at a plan rather than run it).
+pub fn expand_all(steps: Vec<Step>) -> Vec<Step> {
+    let mut out = Vec::with_capacity(steps.len());
+    let mut todo: Vec<Step> = steps.into_iter().rev().collect();
+    while let Some(s) = todo.pop() {
+        match s {
+            Step::More(m) => {
+                let mut v = Vec::new();
+                m.expand(&mut v);
+                todo.extend(v.into_iter().rev());
+            }
+            s => out.push(s),
+        }
+    }
+    out
 }
