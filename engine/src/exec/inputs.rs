@@ -245,7 +245,9 @@ impl Exec<'_> {
             override_pct: 100,
             cutting: false,
         }));
-        self.steps.push_back(Step::HoldSuppress(false));
+        // The alarm comes the moment the return is complete, before a feed hold or single block
+        // stop that waited for the end of the cycle could hold the control first (GSK-RT-26,
+        // GSK-RT-27).
         self.steps.push_back(Step::Alarm(Alarm::new(
             AlarmKind::OverloadRetract,
             format!("motor current above {}% for {} ms: tap retracted", w.threshold_pct, w.delay_us / 1000),

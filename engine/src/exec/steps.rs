@@ -258,6 +258,12 @@ impl Exec<'_> {
         let now = self.now;
         let d = t.target - self.cmd[t.axis];
         let b = if d != 0 { self.backlash(t.axis, d.signum() as i8) } else { 0.0 };
+        if d == 0 && b == 0.0 {
+            // A stroke of no length (the tap already stands at its target, e.g. an overload
+            // return after a peck retract that ended at the start point): nothing turns, so
+            // RGSPP / RGSPM stay 0 (COM-SYNC-03).
+            return;
+        }
         let rpm = t.rpm.min(self.cfg.rigid_max_rpm.max(1)) as f64 * t.override_pct.max(1) as f64 / 100.0;
         let lead = t.lead_nm as f64;
         let v = rpm * lead / 60e6;

@@ -135,15 +135,12 @@ pub fn input() -> impl Strategy<Value = GenInput> {
     (trigger(), action()).prop_map(|(trigger, action)| GenInput { trigger, action })
 }
 
-/// The actions that leave the two runs of a differential comparison comparable: nothing that
-/// depends on where the axes are or cuts a stroke short at a fixed time.
+/// The actions that leave the two runs of a differential comparison comparable: nothing whose
+/// effect depends on when it lands. A feed hold or a cycle start at a fixed time is not: dry run
+/// shortens the G01 moves, so the same instant falls in another phase and a cycle start may come
+/// before the hold it was meant to end (found by the campaign, seed 2000).
 pub fn benign_action() -> impl Strategy<Value = Action> {
-    prop_oneof![
-        Just(Action::CycleStart),
-        Just(Action::FeedHold),
-        any::<bool>().prop_map(Action::SingleBlock),
-        (50u8..201).prop_map(Action::FeedOverride),
-    ]
+    prop_oneof![(0u8..201).prop_map(Action::FeedOverride), (0u8..101).prop_map(Action::SpindleOverride)]
 }
 
 /// A whole case with up to `inputs` inputs of any kind and no comparison run.
