@@ -201,7 +201,8 @@ impl Units {
     pub fn coord(self, w: &Words, letter: char) -> Result<Option<Nm>, Alarm> {
         let Some(word) = w.get(letter) else { return Ok(None) };
         let v = self.len(word.value);
-        if v.abs() > MAX_COORD_NM {
+        // unsigned_abs: a saturated i64::MIN (a huge negative word) has no i64 magnitude.
+        if v.unsigned_abs() > MAX_COORD_NM as u64 {
             return Err(w.alarm(
                 AlarmKind::WordOutOfRange,
                 &word,

@@ -336,7 +336,7 @@ impl GskInterp {
         let (lead_nm, right_hand) = match (w.get('F'), w.get('I')) {
             (Some(f), None) => {
                 let v = f.value.scaled(self.units.unit_nm());
-                if v == 0 || v.abs() > 500 * NM_PER_MM {
+                if v == 0 || v.unsigned_abs() > 500 * NM_PER_MM as u64 {
                     return Err(w.alarm(
                         AlarmKind::WordOutOfRange,
                         &f,
@@ -461,7 +461,7 @@ impl GskInterp {
     fn q_word(&self, w: &Words, qw: &Word) -> Result<Nm, Alarm> {
         let (v, limit_ok) = if self.cfg.q_in_mm || qw.value.point {
             let v = qw.value.scaled(self.units.unit_nm());
-            (v, v.abs() <= 9_999_999_900)
+            (v, v.unsigned_abs() <= 9_999_999_900)
         } else {
             let Some(n) = qw.value.as_int() else { unreachable!("a number without point is integral") };
             (n.saturating_mul(self.cfg.increment_nm), n.abs() <= 99_999_999)
