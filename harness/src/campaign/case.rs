@@ -103,6 +103,30 @@ pub enum Edge {
     SpeedBeyond,
 }
 
+impl Edge {
+    /// Every edge word, valid and invalid.
+    pub const ALL: [Edge; 18] = [
+        Edge::DwellMax,
+        Edge::DwellBeyond,
+        Edge::DwellNegative,
+        Edge::RepeatMin,
+        Edge::RepeatZero,
+        Edge::RepeatBeyond,
+        Edge::RetractMax,
+        Edge::RetractBeyond,
+        Edge::PeckMax,
+        Edge::PeckBeyond,
+        Edge::OverloadMax,
+        Edge::OverloadBeyond,
+        Edge::JBeyond,
+        Edge::LeadMax,
+        Edge::LeadBeyond,
+        Edge::LeadZero,
+        Edge::SpeedMax,
+        Edge::SpeedBeyond,
+    ];
+}
+
 /// The program's choices (raw numbers; see the accessors for what each one means).
 #[derive(Debug, Clone, PartialEq, Eq, Arbitrary)]
 pub struct ProgramSpec {

@@ -25,27 +25,7 @@ fn cancel() -> impl Strategy<Value = Cancel> {
 
 /// Every edge word, valid and invalid.
 pub fn edge() -> impl Strategy<Value = Edge> {
-    use Edge::*;
-    proptest::sample::select(vec![
-        DwellMax,
-        DwellBeyond,
-        DwellNegative,
-        RepeatMin,
-        RepeatZero,
-        RepeatBeyond,
-        RetractMax,
-        RetractBeyond,
-        PeckMax,
-        PeckBeyond,
-        OverloadMax,
-        OverloadBeyond,
-        JBeyond,
-        LeadMax,
-        LeadBeyond,
-        LeadZero,
-        SpeedMax,
-        SpeedBeyond,
-    ])
+    proptest::sample::select(Edge::ALL.to_vec())
 }
 
 prop_compose! {
