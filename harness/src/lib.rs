@@ -12,6 +12,7 @@
 //! - [`scenario`]: scenario files, their expectations and verdicts;
 //! - [`campaign`]: generated cases (programs, parameters, inputs and faults), the invariants
 //!   every run must keep, and failures written back as scenario files;
+//! - [`import`]: recorded traces (JSON Lines, CSV, VCD, SHDR) read as engine events;
 //! - [`fuzz`]: the logic of the cargo-fuzz targets, replayed by `cargo test`.
 
 pub mod campaign;
@@ -21,6 +22,7 @@ pub mod cli_scenario;
 pub mod determinism;
 pub mod diag;
 pub mod fuzz;
+pub mod import;
 pub mod jsonl;
 pub mod params_yaml;
 pub mod render;

@@ -1,0 +1,178 @@
+//! Number parsing shared by the importers: exact decimals to fixed point (JSON Lines, SHDR) and a
+//! fast decimal-to-`f64` parser for CSV fields (exact on the fast path, `str::parse` otherwise).
+
+/// Powers of ten exactly representable as `f64`.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18,
+    1e19, 1e20, 1e21, 1e22,
+];
+
+/// Parses a decimal number (`-12.5`, `3`, `1e-3`, `+.5`) as `f64`; `None` when it is not one (or
+/// not finite). Surrounding spaces are allowed.
+pub fn parse_f64(s: &[u8]) -> Option<f64> {
+    let s = s.trim_ascii();
+    let (neg, digits) = match s.first() {
+        Some(b'-') => (true, &s[1..]),
+        Some(b'+') => (false, &s[1..]),
+        _ => (false, s),
+    };
+    let mut mant: u64 = 0;
+    let mut n_digits = 0u32;
+    let mut frac = 0i32;
+    let mut seen_dot = false;
+    let mut i = 0;
+    while i < digits.len() {
+        let c = digits[i];
+        if c.is_ascii_digit() {
+            if n_digits >= 19 {
+                return slow(s);
+            }
+            mant = mant * 10 + u64::from(c - b'0');
+            if mant != 0 {
+                n_digits += 1;
+            }
+            if seen_dot {
+                frac += 1;
+            }
+        } else if c == b'.' && !seen_dot {
+            seen_dot = true;
+        } else {
+            return slow(s);
+        }
+        i += 1;
+    }
+    if digits.is_empty() || digits == b"." {
+        return None;
+    }
+    if mant >= 1 << 53 || frac as usize >= POW10.len() {
+        return slow(s);
+    }
+    let v = mant as f64 / POW10[frac as usize];
+    Some(if neg { -v } else { v })
+}
+
+/// The general case, through the standard library.
+fn slow(s: &[u8]) -> Option<f64> {
+    let v: f64 = std::str::from_utf8(s).ok()?.parse().ok()?;
+    v.is_finite().then_some(v)
+}
+
+/// `v × 10^decimals` rounded to the nearest integer; `None` when out of `i64` or not finite.
+pub fn f64_to_fixed(v: f64, decimals: u32) -> Option<i64> {
+    let x = (v * POW10[decimals as usize]).round();
+    // 2^63 is exactly representable; anything at or past it does not fit.
+    (x.is_finite() && x.abs() < 9.223_372_036_854_775e18).then_some(x as i64)
+}
+
+/// Parses an exact decimal (`-12.5`, `0.000001`, `1e-6`, `50`) as an integer of `decimals`
+/// decimal places, rounding any further digits half away from zero; `None` when the text is not a
+/// decimal or the value does not fit an `i64`.
+pub fn decimal_to_fixed(s: &str, decimals: u32) -> Option<i64> {
+    let b = s.trim().as_bytes();
+    let (neg, rest) = match b.first() {
+        Some(b'-') => (true, &b[1..]),
+        Some(b'+') => (false, &b[1..]),
+        _ => (false, b),
+    };
+    let (num, exp) = match rest.iter().position(|&c| c == b'e' || c == b'E') {
+        Some(i) => {
+            let e: i64 = std::str::from_utf8(&rest[i + 1..]).ok()?.parse().ok()?;
+            (&rest[..i], e)
+        }
+        None => (rest, 0),
+    };
+    let (int, frac) = match num.iter().position(|&c| c == b'.') {
+        Some(i) => (&num[..i], &num[i + 1..]),
+        None => (num, &num[num.len()..]),
+    };
+    if int.is_empty() && frac.is_empty() || !int.iter().chain(frac).all(u8::is_ascii_digit) {
+        return None;
+    }
+    // value = digits × 10^(shift), digits = int ++ frac.
+    let shift = exp.checked_add(i64::from(decimals))?.checked_sub(frac.len() as i64)?;
+    let mut acc: i128 = 0;
+    let limit: i128 = 1 << 100;
+    for &c in int.iter().chain(frac) {
+        acc = acc * 10 + i128::from(c - b'0');
+        if acc > limit {
+            return None;
+        }
+    }
+    let value = if shift >= 0 {
+        if shift > 38 && acc != 0 {
+            return None;
+        }
+        let mut v = acc;
+        for _ in 0..shift.min(38) {
+            v = v.checked_mul(10)?;
+        }
+        v
+    } else {
+        let drop = (-shift).min(38);
+        let p = 10i128.checked_pow(u32::try_from(drop).ok()?)?;
+        let (q, r) = (acc / p, acc % p);
+        if r * 2 >= p {
+            q + 1
+        } else {
+            q
+        }
+    };
+    let value = if neg { -value } else { value };
+    i64::try_from(value).ok()
+}
+
+/// Parses an unsigned integer (decimal, or hexadecimal with `0x`); `None` when it is not one.
+pub fn parse_u64(s: &[u8]) -> Option<u64> {
+    let s = s.trim_ascii();
+    if let Some(h) = s.strip_prefix(b"0x").or_else(|| s.strip_prefix(b"0X")) {
+        return u64::from_str_radix(std::str::from_utf8(h).ok()?, 16).ok();
+    }
+    if s.is_empty() || !s.iter().all(u8::is_ascii_digit) {
+        return None;
+    }
+    std::str::from_utf8(s).ok()?.parse().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rstest::rstest;
+
+    #[rstest]
+    #[case("50", 6, Some(50_000_000))]
+    #[case("-12.5", 6, Some(-12_500_000))]
+    #[case("0.000001", 6, Some(1))]
+    #[case("1e-6", 6, Some(1))]
+    #[case("359.999", 3, Some(359_999))]
+    #[case("0.0000005", 6, Some(1))]
+    #[case("-0.0000005", 6, Some(-1))]
+    #[case("1e400", 6, None)]
+    #[case("1e-400", 6, Some(0))]
+    #[case("abc", 6, None)]
+    #[case(".", 6, None)]
+    #[case("99999999999999999999", 0, None)]
+    fn decimals(#[case] s: &str, #[case] d: u32, #[case] want: Option<i64>) {
+        assert_eq!(decimal_to_fixed(s, d), want);
+    }
+
+    #[rstest]
+    #[case("1.5", Some(1.5))]
+    #[case(" -0.25 ", Some(-0.25))]
+    #[case("1e3", Some(1000.0))]
+    #[case("12345678901234567890.5", Some(12_345_678_901_234_567_890.5))]
+    #[case("", None)]
+    #[case("-", None)]
+    #[case("1.2.3", None)]
+    #[case("nan", None)]
+    #[case("inf", None)]
+    fn floats(#[case] s: &str, #[case] want: Option<f64>) {
+        assert_eq!(parse_f64(s.as_bytes()), want);
+    }
+
+    #[test]
+    fn fast_path_is_exact() {
+        for s in ["0.001328", "123.456789", "-0.000001", "3600.999"] {
+            assert_eq!(parse_f64(s.as_bytes()), s.parse().ok());
+        }
+    }
+}
