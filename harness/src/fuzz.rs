@@ -28,8 +28,7 @@
 use std::path::{Component, Path};
 
 use arbitrary::{Arbitrary, Unstructured};
-use nc_engine::invariants::{time_ordered_ends, Invariant};
-use nc_engine::trace::EndReason;
+use nc_engine::invariants::time_ordered_ends;
 use nc_engine::{Machine, RunOptions};
 
 use crate::campaign::{check_case, Case};
@@ -151,23 +150,11 @@ fn program_file_is_safe(text: &str) -> bool {
 ///
 /// On a bug: the engine panics or breaks an invariant (the message lists the violations and the
 /// case).
-///
-/// One known false alarm is left out: INV-06 (dry run keeps the tapping strokes) compares the
-/// number of closed cutting phases of two runs, and when the plain run ends at the campaign's time
-/// limit the dry run, being faster before the cycle, has closed one more (the invariant has no
-/// notion of a truncated run; reported to the owner of `nc_engine::invariants`, reproducer in
-/// `fuzz/README.md`).
 pub fn engine_case(data: &[u8]) {
     let Ok(case) = Case::arbitrary_take_rest(Unstructured::new(data)) else { return };
     let report = check_case(&case);
-    let truncated = report.end == EndReason::TimeLimit.name();
-    let violations: Vec<_> = report
-        .violations
-        .iter()
-        .filter(|v| !(truncated && v.invariant == Invariant::DryRunKeepsTapFeed))
-        .collect();
-    if !violations.is_empty() {
-        let list: Vec<String> = violations.iter().map(|v| format!("  {v}")).collect();
+    if !report.violations.is_empty() {
+        let list: Vec<String> = report.violations.iter().map(|v| format!("  {v}")).collect();
         panic!("invariants broken:\n{}\ncase: {case:?}", list.join("\n"));
     }
 }
