@@ -68,11 +68,17 @@ pub enum AlarmKind {
     OverloadRetract,
     /// NC-1040: a machine parameter is out of its range (parameter change at run time).
     ParameterOutOfRange,
+    /// NC-1050: `knd-lathe` G93: the tap, following the braking spindle, reached the end of the
+    /// overshoot allowance (50 mm by default) before the spindle stopped.
+    TapOvershoot,
+    /// NC-1051: `knd-lathe` G93: the drive did not report zero speed (ZSP) within the timer after
+    /// the spindle was braked or stopped: the cycle cannot reverse ("the tap never retracts").
+    ZeroSpeedNotReported,
 }
 
 impl AlarmKind {
     /// Every alarm kind, in declaration order.
-    pub const ALL: [AlarmKind; 31] = [
+    pub const ALL: [AlarmKind; 33] = [
         AlarmKind::ImproperGCode,
         AlarmKind::FeedZero,
         AlarmKind::IllegalSCode,
@@ -104,6 +110,8 @@ impl AlarmKind {
         AlarmKind::EmergencyStop,
         AlarmKind::OverloadRetract,
         AlarmKind::ParameterOutOfRange,
+        AlarmKind::TapOvershoot,
+        AlarmKind::ZeroSpeedNotReported,
     ];
 
     /// The alarm number as the trace writes it.
@@ -141,6 +149,8 @@ impl AlarmKind {
             EmergencyStop => "NC-1030",
             OverloadRetract => "NC-1031",
             ParameterOutOfRange => "NC-1040",
+            TapOvershoot => "NC-1050",
+            ZeroSpeedNotReported => "NC-1051",
         }
     }
 
@@ -179,6 +189,8 @@ impl AlarmKind {
             EmergencyStop => "EMERGENCY STOP",
             OverloadRetract => "OVERLOAD RETRACT",
             ParameterOutOfRange => "PARAMETER OUT OF RANGE",
+            TapOvershoot => "TAP OVERSHOOT BEYOND ALLOWANCE",
+            ZeroSpeedNotReported => "ZERO SPEED NOT REPORTED",
         }
     }
 }

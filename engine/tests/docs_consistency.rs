@@ -21,16 +21,16 @@ fn read_dir_text(dir: &Path, ext: &str) -> Vec<(PathBuf, String)> {
     out
 }
 
-/// Rule ids like `GSK-RT-07` in a text (families COM, GSK, FAN).
+/// Rule ids like `GSK-RT-07` in a text (families COM, GSK, FAN, KND).
 fn rule_ids(text: &str) -> BTreeSet<String> {
     let mut ids = BTreeSet::new();
     let b = text.as_bytes();
-    for fam in ["COM-", "GSK-", "FAN-"] {
+    for fam in ["COM-", "GSK-", "FAN-", "KND-"] {
         let mut from = 0;
         while let Some(i) = text[from..].find(fam) {
             let start = from + i;
             let mut end = start + fam.len();
-            while end < b.len() && b[end].is_ascii_uppercase() {
+            while end < b.len() && (b[end].is_ascii_uppercase() || b[end].is_ascii_digit()) {
                 end += 1;
             }
             if end > start + fam.len() && end < b.len() && b[end] == b'-' {
@@ -119,6 +119,8 @@ fn every_alarm_is_documented() {
         EmergencyStop,
         OverloadRetract,
         ParameterOutOfRange,
+        TapOvershoot,
+        ZeroSpeedNotReported,
     ];
     for k in all {
         assert!(

@@ -53,7 +53,14 @@ fn every_example_program_is_deterministic() {
     assert!(!programs.is_empty());
     for p in &programs {
         let p = p.to_string_lossy();
-        let dialect = if p.contains("fanuc") { "fanuc-mill" } else { "gsk-lathe" };
+        let name = p.rsplit('/').next().unwrap_or(&p);
+        let dialect = if name.starts_with("fanuc") {
+            "fanuc-mill"
+        } else if name.starts_with("knd") {
+            "knd-lathe"
+        } else {
+            "gsk-lathe"
+        };
         let (code, err) =
             check(&["run", &p, "--dialect", dialect, "--check-determinism", "--out", "/dev/null"]);
         assert_eq!(code, 0, "{p}: {err}");

@@ -8,6 +8,7 @@
 pub mod common;
 pub mod fanuc_mill;
 pub mod gsk_lathe;
+pub mod knd_lathe;
 
 use crate::alarm::Alarm;
 use crate::exec::PlantConfig;
@@ -51,7 +52,7 @@ pub trait Interpreter {
 }
 
 /// Every dialect.
-pub static ALL: &[&dyn Dialect] = &[&gsk_lathe::GskLathe, &fanuc_mill::FanucMill];
+pub static ALL: &[&dyn Dialect] = &[&gsk_lathe::GskLathe, &fanuc_mill::FanucMill, &knd_lathe::KndLathe];
 
 /// Looks a dialect up by name.
 pub fn by_name(name: &str) -> Option<&'static dyn Dialect> {

@@ -40,8 +40,10 @@ impl Exec<'_> {
             PlcAction::ZeroSpeed => {
                 if self.spindle_at(self.now).1 == 0.0 {
                     self.set_signal(Signal::Zsp, true);
+                    self.check_await();
                 }
             }
+            PlcAction::AwaitTimer(n, alarm) => self.await_timer(n, alarm),
             PlcAction::ExcessError => {
                 if self.stall_angle.is_some() && self.spindle.stalled {
                     self.raise(Alarm::new(

@@ -7,6 +7,7 @@
 //! after their own delays.
 
 pub mod config;
+mod follow;
 mod inputs;
 pub mod motion;
 mod plc;
@@ -117,6 +118,8 @@ pub(crate) struct Exec<'a> {
     hold_requested: bool,
     /// The step that started the present motion (re-queued when a hold interrupts it).
     motion_step: Option<Step>,
+    /// Serial number of the present `Step::AwaitSignal` wait (its timer checks it).
+    await_no: u64,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -189,6 +192,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         params: machine.params.clone(),
         hold_requested: false,
         motion_step: None,
+        await_no: 0,
     };
     ex.main_loop();
 }

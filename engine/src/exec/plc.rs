@@ -23,6 +23,8 @@ pub enum PlcAction {
     StallTimer,
     /// The tap axis ran ahead of a stalled spindle by the excess-error limit.
     ExcessError,
+    /// The CNC's timer of wait `n` (`Step::AwaitSignal`) ran out: raise the alarm.
+    AwaitTimer(u64, crate::alarm::AlarmKind),
     /// The spindle's ramp to a stop ends: the drive reports zero speed if it is still stopped.
     ZeroSpeed,
 }

@@ -104,6 +104,25 @@ impl Profile {
         Profile { pieces, n: 1, dist, total }
     }
 
+    /// Braking from `v0` nm/µs to rest in `total` µs at constant deceleration, cut short where
+    /// the distance reaches `room` nm (at the end of that period of `period`). Returns the
+    /// profile and whether it was cut short (the coast would have gone past `room`).
+    pub fn braking(v0: f64, total: Micros, room: f64, period: Micros) -> (Profile, bool) {
+        let total_f = total.max(1) as f64;
+        let a = v0 / total_f;
+        let coast = 0.5 * v0 * total_f;
+        let mut pieces = [NO_PIECE; MAX_PIECES];
+        pieces[0] = Piece { t0: 0.0, s0: 0.0, v0, a: -a };
+        if coast <= room || v0 <= 0.0 {
+            return (Profile { pieces, n: 1, dist: coast, total: total.max(1) }, false);
+        }
+        // s(t) = v0·t − a·t²/2 = room: the earlier root.
+        let disc = (v0 * v0 - 2.0 * a * room).max(0.0);
+        let t = (v0 - disc.sqrt()) / a;
+        let end = ceil_to((t.ceil() as Micros).max(1), period.max(1)).min(total.max(1));
+        (Profile { pieces, n: 1, dist: room, total: end }, true)
+    }
+
     fn offset(mut self, s0: f64) -> Profile {
         self.pieces[0].s0 = s0;
         self.dist = s0;

@@ -108,6 +108,10 @@ impl Exec<'_> {
                 }
             }
             Step::Tap(t) => self.start_tap(t),
+            Step::Follow(f) => self.start_follow(f),
+            Step::AwaitSignal { signal, value, timeout_us, alarm } => {
+                self.start_await(signal, value, timeout_us, alarm)
+            }
             Step::More(m) => {
                 // The next chunk of a peck cycle, planned now that the run has got there.
                 let mut next = Vec::new();
@@ -209,7 +213,7 @@ impl Exec<'_> {
     }
 
     /// Backlash to take up when axis `i` moves in direction `dir` (and records the direction).
-    fn backlash(&mut self, i: usize, dir: i8) -> f64 {
+    pub(super) fn backlash(&mut self, i: usize, dir: i8) -> f64 {
         let last = self.last_dir[i];
         self.last_dir[i] = dir;
         if last != 0 && last != dir {
@@ -314,7 +318,7 @@ impl Exec<'_> {
         self.plc.at(now + self.cfg.plc.spindle_stall_us, super::plc::PlcAction::StallTimer);
     }
 
-    fn start_motion(&mut self, target: Pos, path: Path) {
+    pub(super) fn start_motion(&mut self, target: Pos, path: Path) {
         let m = Motion {
             t0: self.now,
             start: self.cmd,

@@ -5,11 +5,12 @@
 //! has no cycle-specific code.
 
 pub mod drill;
+pub mod follow_tap;
 pub mod rigid_tap;
 
 use crate::alarm::{Alarm, AlarmKind};
 use crate::input::CurrentSource;
-use crate::trace::{Phase, AXES};
+use crate::trace::{Phase, Signal, AXES};
 use crate::units::{Micros, Nm};
 
 /// Physical positions of every axis slot (radius for a lathe's X), nm or nano-degrees.
@@ -81,6 +82,48 @@ pub struct TapMove {
     pub override_pct: u32,
     /// Cutting stroke (into the material) rather than a retract.
     pub cutting: bool,
+}
+
+/// One motion of an axis that follows the spindle's encoder while the spindle is in speed mode
+/// (not position mode): travel = lead × the revolutions the spindle turns. No rigid tapping
+/// signals (RGSPP/RGSPM) are involved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Follow {
+    /// The following axis slot.
+    pub axis: usize,
+    /// Where the axis goes (`Cut`, `Return`), or the farthest it may go (`Brake`).
+    pub target: Nm,
+    /// Lead, nm per revolution (> 0).
+    pub lead_nm: i64,
+    /// Whether a reversal of the axis takes up its backlash first (while the spindle turns).
+    pub backlash: bool,
+    /// What the spindle does meanwhile.
+    pub kind: FollowKind,
+    /// `Cut`: raised when the spindle is not turning; `Brake`: raised when the axis reaches
+    /// `target` before the spindle has stopped.
+    pub alarm: AlarmKind,
+}
+
+/// What the spindle does while an axis follows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FollowKind {
+    /// The spindle keeps turning at its speed; the axis runs at lead × that speed (with the
+    /// cutting feed's acceleration) to the target.
+    Cut,
+    /// The spindle brakes from its present speed to rest in `brake_us`; the axis follows it,
+    /// overshooting by lead × the revolutions turned while braking.
+    Brake {
+        /// Brake time, µs.
+        brake_us: Micros,
+    },
+    /// The spindle, at rest, turns at `rpm` (`forward`: M03 sense) with its speed-mode
+    /// acceleration; the axis follows it to the target, where both come to rest.
+    Return {
+        /// Speed, rpm.
+        rpm: u32,
+        /// Direction.
+        forward: bool,
+    },
 }
 
 /// The overload watch of a GSK rigid tapping cycle (word D or parameter 271).
@@ -175,6 +218,21 @@ pub enum Step {
     End,
     /// Raise an alarm at this point of the execution and stop.
     Alarm(Alarm),
+    /// An axis locked to a spindle in speed mode (the spindle leads, the axis follows its
+    /// encoder): see [`Follow`].
+    Follow(Follow),
+    /// Waits until `signal` has `value`; raises `alarm` when it has not come `timeout_us` after
+    /// the wait began (the CNC's own timer, not the PLC's).
+    AwaitSignal {
+        /// The signal.
+        signal: Signal,
+        /// The value awaited.
+        value: bool,
+        /// The timer, µs.
+        timeout_us: Micros,
+        /// Raised when the timer runs out.
+        alarm: AlarmKind,
+    },
     /// The rest of a peck cycle, expanded into its steps when the executor reaches it (see
     /// [`More`]).
     More(Box<More>),

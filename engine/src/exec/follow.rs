@@ -1,0 +1,139 @@
+//! An axis that follows the spindle's encoder while the spindle is in speed mode (KND G93): the
+//! cut at the spindle's speed, the braking coast with its overshoot, and the return behind the
+//! reversed spindle; and the CNC's own wait for a signal with a timer (`Step::AwaitSignal`).
+//!
+//! Knows no G code: everything arrives as [`Follow`] and [`FollowKind`] (rules KND-G93-* in
+//! `docs/rules/knd-lathe.md` describe the cycle built from them).
+
+use super::motion::Path;
+use super::plc::PlcAction;
+use super::profile::Profile;
+use super::{Active, AfterAwait, Exec};
+use crate::alarm::{Alarm, AlarmKind};
+use crate::plan::{Follow, FollowKind, Step};
+use crate::trace::{Signal, AXES};
+use crate::units::{ceil_to, Micros, Nm};
+
+impl Exec<'_> {
+    /// Starts a following motion.
+    pub(super) fn start_follow(&mut self, f: Follow) {
+        let now = self.now;
+        let d = f.target - self.cmd[f.axis];
+        let lead = f.lead_nm.max(1) as f64;
+        let period = self.cfg.period_us;
+        let (angle, rpm) = self.spindle_at(now);
+        let mut target = self.cmd;
+        match f.kind {
+            FollowKind::Cut => {
+                if rpm == 0.0 {
+                    self.raise(Alarm::new(f.alarm, "the spindle is not turning when the cycle starts"));
+                    return;
+                }
+                let b = self.follow_backlash(&f, d);
+                if d == 0 && b == 0.0 {
+                    return;
+                }
+                // The axis runs at lead × the spindle's speed within the cutting acceleration; a
+                // single-axis profile with its backlash first (the spindle keeps its own state).
+                let vmax = self.cfg.feed_max_nm_min / 60e6;
+                let v = (rpm.abs() * lead / 60e6).min(vmax);
+                let a = vmax / self.cfg.feed_ramp_us.max(1) as f64;
+                let mut profiles = [Profile::still(); AXES];
+                let mut backlash = [0.0; AXES];
+                let dist = d.unsigned_abs() as f64 + b;
+                // A spindle still ramping (just started): the axis follows its encoder through
+                // the ramp (COM-MOT-02's closed form).
+                profiles[f.axis] = match self.spindle.ramp(now) {
+                    Some(ramp) => Profile::following(dist, lead / 60e6, ramp, vmax, a, period)
+                        .unwrap_or_else(|| Profile::trapezoid(dist, v, a, period)),
+                    None => Profile::trapezoid(dist, v, a, period),
+                };
+                backlash[f.axis] = b;
+                target[f.axis] = f.target;
+                self.start_motion(target, Path::Rapid { profiles, backlash });
+            }
+            FollowKind::Brake { brake_us } => {
+                if rpm == 0.0 {
+                    return;
+                }
+                let total = ceil_to(brake_us.max(1), period.max(1));
+                let v0 = rpm.abs() * lead / 60e6;
+                let coast = 0.5 * v0 * total as f64;
+                let room = d.unsigned_abs() as f64;
+                let (profile, over) = Profile::braking(v0, total, room, period);
+                let travel = profile.dist.round() as Nm;
+                target[f.axis] = self.cmd[f.axis] + d.signum() * travel;
+                self.spindle.hold(now, angle);
+                self.stall_angle = None;
+                let spin = rpm.signum();
+                self.start_motion(target, Path::Tap { profile, axis: f.axis, backlash: 0.0, lead, spin });
+                if over {
+                    let a = Alarm::new(
+                        f.alarm,
+                        format!(
+                            "the braking spindle would carry the tap {:.3} mm past the end point; the allowance is {:.3} mm",
+                            coast / 1e6,
+                            room / 1e6
+                        ),
+                    );
+                    self.steps.push_front(Step::Alarm(a));
+                }
+            }
+            FollowKind::Return { rpm: r, forward } => {
+                let b = self.follow_backlash(&f, d);
+                if d == 0 && b == 0.0 {
+                    return;
+                }
+                let r = r.min(self.cfg.spindle_max_rpm).max(1) as f64;
+                let v = r * lead / 60e6;
+                let a_rpm = self.cfg.spindle_max_rpm.max(1) as f64 / self.cfg.spindle_ramp_us.max(1) as f64;
+                let profile = Profile::trapezoid(d.unsigned_abs() as f64 + b, v, a_rpm * lead / 60e6, period);
+                self.spindle.hold(now, angle);
+                self.stall_angle = None;
+                if !self.machine_lock {
+                    self.set_signal(Signal::Zsp, false);
+                }
+                target[f.axis] = f.target;
+                let spin = if forward { 1.0 } else { -1.0 };
+                self.start_motion(target, Path::Tap { profile, axis: f.axis, backlash: b, lead, spin });
+            }
+        }
+    }
+
+    /// Backlash to take up before a following motion of `d` nm (0 when the step does not
+    /// compensate it; the direction is recorded either way).
+    fn follow_backlash(&mut self, f: &Follow, d: Nm) -> f64 {
+        if d == 0 {
+            return 0.0;
+        }
+        let b = self.backlash(f.axis, d.signum() as i8);
+        if f.backlash {
+            b
+        } else {
+            0.0
+        }
+    }
+
+    /// Starts waiting for `signal` to have `value`, with the CNC's timer raising `alarm`.
+    pub(super) fn start_await(&mut self, signal: Signal, value: bool, timeout_us: Micros, alarm: AlarmKind) {
+        if self.signals.get(signal) == value {
+            return;
+        }
+        self.await_no += 1;
+        self.active = Active::Await { signal, value, then: AfterAwait::Nothing };
+        self.plc.at(self.now + timeout_us, PlcAction::AwaitTimer(self.await_no, alarm));
+    }
+
+    /// The timer of wait `n` ran out: the alarm, unless the signal came.
+    pub(super) fn await_timer(&mut self, n: u64, alarm: AlarmKind) {
+        if n != self.await_no {
+            return;
+        }
+        if let Active::Await { signal, value, then: AfterAwait::Nothing } = self.active {
+            if self.signals.get(signal) != value {
+                let what = format!("{} did not become {} within the timer", signal.name(), u8::from(value));
+                self.raise(Alarm::new(alarm, what));
+            }
+        }
+    }
+}
