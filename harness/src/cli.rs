@@ -55,6 +55,13 @@ pub enum Command {
     ///
     /// Exits 0 when every case kept every invariant, 1 when one did not, 2 for bad arguments.
     Campaign(crate::cli_campaign::CampaignArgs),
+    /// Compare a trace recorded on a real control with the reference run of the same scenario
+    /// or program (docs/checking.md): discrete events, key points, synchronisation error,
+    /// position envelope and the scenario's temporal rules, within tolerances.
+    ///
+    /// Exits 0 when the trace conforms, 1 when it diverges (every divergence listed with rule
+    /// id, time, expected, actual and margin), 2 for errors in the input.
+    Check(crate::cli_check::CheckArgs),
 }
 
 /// Arguments of `nc-conform run`.
@@ -100,6 +107,7 @@ pub fn main() -> ExitCode {
     match cli.command {
         Command::Run(args) => ExitCode::from(run(&args)),
         Command::Campaign(args) => ExitCode::from(crate::cli_campaign::run(&args)),
+        Command::Check(args) => ExitCode::from(crate::cli_check::run(&args)),
     }
 }
 

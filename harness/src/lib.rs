@@ -10,14 +10,17 @@
 //! - [`diag`]: input errors with their location, rendered with miette or as plain text;
 //! - [`render`]: event listings, ASCII timing diagrams and VCD files of a trace;
 //! - [`scenario`]: scenario files, their expectations and verdicts;
+//! - [`check`]: `nc-conform check`, a recorded trace compared with the reference;
 //! - [`campaign`]: generated cases (programs, parameters, inputs and faults), the invariants
 //!   every run must keep, and failures written back as scenario files;
 //! - [`import`]: recorded traces (JSON Lines, CSV, VCD, SHDR) read as engine events;
 //! - [`fuzz`]: the logic of the cargo-fuzz targets, replayed by `cargo test`.
 
 pub mod campaign;
+pub mod check;
 pub mod cli;
 pub mod cli_campaign;
+pub mod cli_check;
 pub mod cli_scenario;
 pub mod determinism;
 pub mod diag;

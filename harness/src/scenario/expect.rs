@@ -535,6 +535,55 @@ pub fn evaluate(exp: &Expectations, trace: &Trace) -> Vec<Verdict> {
     out
 }
 
+/// The temporal rules of `exp` that a third-party trace can be held to, evaluated on `trace`
+/// (`nc-conform check`): the `always` properties over signals and phases (`holds` with signal
+/// and phase items only, `never_rises`) and the `reached` states over signals and phases. Exact
+/// positions, `checks`, `end` and `alarms` are left out: the comparison checks them with
+/// tolerances, and a recorded trace has no inputs or program lines.
+pub fn evaluate_discrete(exp: &Expectations, trace: &Trace) -> Vec<Verdict> {
+    let discrete = |s: &State| s.0.iter().all(|i| matches!(i, Item::Signal(..) | Item::Phase(_)));
+    let always = exp
+        .always
+        .iter()
+        .filter(|a| match &a.window {
+            Window::While(s) => discrete(s),
+            _ => true,
+        })
+        .map(|a| AlwaysExp {
+            rule: a.rule.clone(),
+            window: a.window.clone(),
+            props: a
+                .props
+                .iter()
+                .filter(|p| match p {
+                    Property::Holds(s) => discrete(s),
+                    Property::NeverRises(_) => true,
+                    _ => false,
+                })
+                .cloned()
+                .collect(),
+        })
+        .filter(|a| !a.props.is_empty())
+        .collect();
+    let reached = exp
+        .reached
+        .iter()
+        .filter(|r| {
+            matches!(&r.target, Target::State(s) if discrete(s)) && r.during.as_ref().is_none_or(discrete)
+        })
+        .cloned()
+        .collect();
+    let only = Expectations {
+        default_rule: exp.default_rule.clone(),
+        alarms: None,
+        end: None,
+        checks: Vec::new(),
+        always,
+        reached,
+    };
+    evaluate(&only, trace)
+}
+
 type Outcome = (bool, Option<u64>, String, String);
 
 fn eval_alarms(exp: &[AlarmExp], trace: &Trace) -> Outcome {

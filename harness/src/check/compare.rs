@@ -1,0 +1,553 @@
+//! The streaming comparison: recorded events are aligned on the anchor, then each goes through
+//! the event matcher, the key-point tracker, the synchronisation error and the position
+//! envelope, and into a compact copy (discrete events, samples thinned to the reference's sample
+//! period, bounded by the reference's length) on which the scenario's temporal rules run.
+//! Memory holds windows and aggregates, never the whole recorded trace.
+
+use nc_engine::trace::{EndSummary, Event, Sample, Signal, Signals, Trace, TraceEvent};
+
+use super::events::{Finding, Key, Matcher};
+use super::keypoints::KeyTracker;
+use super::reference::{unwrap_delta, Reference};
+use super::tolerance::{attribute, mm_nm, ms_us, Anchor, Context, Tolerances, Topic};
+use super::{Divergence, Point, MAX_DIVERGENCES};
+use crate::scenario::timeline::{fixed, ms};
+
+/// Recorded events buffered while looking for the anchor, at most.
+const MAX_PENDING: usize = 2_000_000;
+
+/// An open run of out-of-tolerance samples (envelope or sync).
+#[derive(Debug, Clone)]
+struct Run {
+    t_first: i64,
+    t_worst: i64,
+    excess: f64,
+    expected: String,
+    actual: String,
+    samples: u64,
+}
+
+/// The synchronisation state inside one recorded stroke.
+#[derive(Debug, Clone, Copy)]
+struct Stroke {
+    pos0: i64,
+    revs: f64,
+    prev: (i64, Sample),
+}
+
+/// Compares recorded events with the reference, one at a time.
+pub struct Comparator<'r> {
+    pub(super) r: &'r Reference<'r>,
+    pub(super) tol: Tolerances,
+    dialect: String,
+    rules: Vec<String>,
+    ref_anchor: Option<i64>,
+    anchor: Anchor,
+    offset: Option<i64>,
+    pending: Vec<TraceEvent>,
+    matcher: Option<Matcher>,
+    matched: usize,
+    keys: KeyTracker,
+    findings: Vec<Finding>,
+    sig: Signals,
+    stroke: Option<Stroke>,
+    sync_run: Option<Run>,
+    env_runs: Vec<Option<Run>>,
+    /// Divergences so far.
+    pub divergences: Vec<Divergence>,
+    /// Divergences left out past [`MAX_DIVERGENCES`].
+    pub omitted: usize,
+    compact: Vec<TraceEvent>,
+    had_phases: bool,
+    last_kept: Option<i64>,
+    last_sample: Option<(i64, Sample)>,
+    alarms: u32,
+    /// Plot points of the recorded trace (one per bucket).
+    pub series: Vec<Point>,
+    bucket_us: i64,
+    /// Recorded events and samples seen.
+    pub events_seen: u64,
+    /// Recorded samples seen.
+    pub samples_seen: u64,
+    /// Largest |sync error| in nm.
+    pub max_sync_nm: f64,
+    /// Largest position excess beyond the envelope, nm.
+    pub max_env_nm: f64,
+    /// Whether the anchor was found.
+    pub anchored: bool,
+    last_t: i64,
+}
+
+impl<'r> Comparator<'r> {
+    /// A comparator against `r`.
+    pub fn new(r: &'r Reference<'r>, tol: Tolerances, anchor: Anchor, scenario_rules: Vec<String>) -> Self {
+        let ref_anchor = match &anchor {
+            Anchor::Offset(_) => None,
+            a => r.trace.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
+        };
+        let offset = match anchor {
+            Anchor::Offset(o) => Some(o),
+            _ => None,
+        };
+        let bucket_us = (r.end_us / 1500).max(1000);
+        Comparator {
+            r,
+            tol,
+            dialect: r.trace.meta.dialect.to_string(),
+            rules: scenario_rules,
+            ref_anchor,
+            anchored: offset.is_some(),
+            anchor,
+            offset,
+            pending: Vec::new(),
+            matcher: Some(Matcher::new(r.trace)),
+            matched: 0,
+            keys: KeyTracker::new(r.tap),
+            findings: Vec::new(),
+            sig: Signals::default(),
+            stroke: None,
+            sync_run: None,
+            env_runs: vec![None; r.axes().len()],
+            divergences: Vec::new(),
+            omitted: 0,
+            compact: Vec::new(),
+            had_phases: false,
+            last_kept: None,
+            last_sample: None,
+            alarms: 0,
+            series: Vec::new(),
+            bucket_us,
+            events_seen: 0,
+            samples_seen: 0,
+            max_sync_nm: 0.0,
+            max_env_nm: 0.0,
+            last_t: 0,
+        }
+    }
+
+    /// Reference events matched (after [`Comparator::finish`]).
+    pub fn matched(&self) -> usize {
+        self.matched
+    }
+
+    /// The offset applied: reference time = recorded time + offset.
+    pub fn offset(&self) -> i64 {
+        self.offset.unwrap_or(0)
+    }
+
+    /// The attribution context at reference time `t`.
+    pub fn context(&self, t: i64) -> Context {
+        Context {
+            dialect: self.dialect.clone(),
+            inputs: self.r.inputs_at(t),
+            overload: self.r.overload_by(t),
+            scenario_rules: self.rules.clone(),
+        }
+    }
+
+    /// Adds a divergence (the first [`MAX_DIVERGENCES`] are kept).
+    pub fn push(&mut self, d: Divergence) {
+        if self.divergences.len() < MAX_DIVERGENCES {
+            self.divergences.push(d);
+        } else {
+            self.omitted += 1;
+        }
+    }
+
+    /// Adds a divergence attributed to the rule that `topic` breaks at reference time `t`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn diverge(
+        &mut self,
+        topic: Topic,
+        check: &'static str,
+        what: String,
+        t: i64,
+        e: String,
+        a: String,
+        m: String,
+    ) {
+        let rule = attribute(topic, &self.context(t));
+        self.push(Divergence {
+            rule,
+            check: check.into(),
+            what,
+            t_us: Some(t),
+            expected: e,
+            actual: a,
+            margin: m,
+        });
+    }
+
+    /// One recorded event, time as recorded.
+    pub fn event(&mut self, ev: TraceEvent) {
+        self.events_seen += 1;
+        if self.offset.is_none() {
+            let hit = matches_anchor(&self.anchor, &ev.event);
+            match (hit, self.ref_anchor) {
+                (true, Some(ra)) => {
+                    self.offset = Some(ra - ev.t_us as i64);
+                    self.anchored = true;
+                }
+                _ if self.pending.len() >= MAX_PENDING => self.give_up_anchor(),
+                _ => {
+                    self.pending.push(ev);
+                    return;
+                }
+            }
+            for p in std::mem::take(&mut self.pending) {
+                self.aligned(p);
+            }
+        }
+        self.aligned(ev);
+    }
+
+    /// No anchor: the first recorded event is taken as the reference's time 0.
+    fn give_up_anchor(&mut self) {
+        let first = self.pending.first().map_or(0, |e| e.t_us as i64);
+        self.offset = Some(-first);
+        let what = format!("anchor ({})", self.anchor.describe());
+        let ra = self.ref_anchor.map_or("absent from the reference too".into(), |t| ms(t.max(0) as u64));
+        self.push(Divergence {
+            rule: self.rules.first().cloned().unwrap_or_else(|| "COM-TIME-01".into()),
+            check: "CHK-ALIGN-01".into(),
+            what,
+            t_us: self.ref_anchor,
+            expected: format!("the anchor in the recorded trace (reference at {ra})"),
+            actual: "not found; the first recorded event is taken as time 0".into(),
+            margin: "-".into(),
+        });
+    }
+
+    fn aligned(&mut self, ev: TraceEvent) {
+        let t = ev.t_us as i64 + self.offset();
+        self.last_t = self.last_t.max(t);
+        let w = self.tol.event_ms;
+        if t < -ms_us(w) {
+            return; // before the reference's start: not part of the run
+        }
+        let keep_until = self.r.end_us + self.r.end_us.max(2_000_000);
+        match &ev.event {
+            Event::Sample(s) => {
+                self.samples_seen += 1;
+                self.keys.event(t, &ev.event);
+                self.sync(t, s);
+                self.envelope(t, s);
+                self.last_sample = Some((t, *s));
+                let period = (self.r.trace.meta.sample_us as i64).max(1000);
+                if t <= keep_until && t >= 0 && self.last_kept.is_none_or(|k| t - k >= period) {
+                    self.last_kept = Some(t);
+                    self.compact.push(TraceEvent { t_us: t as u64, event: ev.event.clone() });
+                }
+                if t >= 0 && t <= keep_until && self.series.last().is_none_or(|p| t - p.t >= self.bucket_us) {
+                    let tap = self.r.tap.map(|tp| s.axes[tp.slot]);
+                    let err = self.stroke.map(|_| self.current_sync(s));
+                    self.series.push(Point { t, tap, rpm: s.spindle_mrpm, sync_nm: err });
+                }
+            }
+            Event::Signal { signal, value } => {
+                if self.sig.get(*signal) == *value {
+                    return; // a level repeated, not an edge
+                }
+                self.sig.set(*signal, *value);
+                self.keys.event(t, &ev.event);
+                if matches!(signal, Signal::Rgspp | Signal::Rgspm) {
+                    self.stroke_edge();
+                }
+                self.discrete(t, &ev);
+            }
+            Event::Function { .. } => self.discrete(t, &ev),
+            Event::Alarm(_) => {
+                self.alarms += 1;
+                self.discrete(t, &ev);
+            }
+            Event::Phase(_) => {
+                self.had_phases = true;
+                self.keep(t, &ev);
+            }
+            Event::Block { .. } | Event::Input { .. } => self.keep(t, &ev),
+            Event::End(_) => {}
+        }
+    }
+
+    fn keep(&mut self, t: i64, ev: &TraceEvent) {
+        let cap = 4 * self.r.trace.events.len().max(10_000);
+        if t >= 0 && self.compact.len() < cap {
+            self.compact.push(TraceEvent { t_us: t as u64, event: ev.event.clone() });
+        }
+    }
+
+    fn discrete(&mut self, t: i64, ev: &TraceEvent) {
+        self.keep(t, ev);
+        let Some(key) = Key::of(&ev.event) else { return };
+        if let Some(m) = &mut self.matcher {
+            m.record(key, t, &self.tol, &mut self.findings);
+        }
+        self.flush_findings();
+    }
+
+    fn flush_findings(&mut self) {
+        for f in std::mem::take(&mut self.findings) {
+            match f {
+                Finding::Late(k, tr, t, w) => self.diverge(
+                    k.topic(),
+                    "CHK-EVT-01",
+                    format!("{} time", k.describe()),
+                    tr,
+                    format!("at {} ± {}", ms(tr.max(0) as u64), ms(w as u64)),
+                    format!("at {}", ms(t.max(0) as u64)),
+                    format!("{} beyond the window", ms(((t - tr).abs() - w) as u64)),
+                ),
+                Finding::Missing(k, tr) => self.diverge(
+                    k.topic(),
+                    "CHK-EVT-02",
+                    format!("{} missing", k.describe()),
+                    tr,
+                    format!("{} at {}", k.describe(), ms(tr.max(0) as u64)),
+                    "never recorded".into(),
+                    "-".into(),
+                ),
+                Finding::Extra(k, t) => self.diverge(
+                    k.topic(),
+                    "CHK-EVT-03",
+                    format!("{} extra", k.describe()),
+                    t,
+                    format!("no further {}", k.describe()),
+                    format!("{} at {}", k.describe(), ms(t.max(0) as u64)),
+                    "-".into(),
+                ),
+                Finding::Order(k, tr, t, before, tb) => self.diverge(
+                    k.topic(),
+                    "CHK-EVT-04",
+                    format!("{} order", k.describe()),
+                    tr,
+                    format!(
+                        "{} ({}) before {} ({})",
+                        k.describe(),
+                        ms(tr.max(0) as u64),
+                        before.describe(),
+                        ms(tb.max(0) as u64)
+                    ),
+                    format!(
+                        "{} recorded at {}, after {}",
+                        k.describe(),
+                        ms(t.max(0) as u64),
+                        before.describe()
+                    ),
+                    format!("{} out of order", ms((tb - tr) as u64)),
+                ),
+            }
+        }
+    }
+
+    fn stroke_edge(&mut self) {
+        let on = self.sig.get(Signal::Rgspp) || self.sig.get(Signal::Rgspm);
+        if !on {
+            self.stroke = None;
+            self.close_sync();
+        } else if self.stroke.is_none() {
+            // Started at the next sample.
+            self.stroke = Some(Stroke { pos0: i64::MIN, revs: 0.0, prev: (0, Sample::default()) });
+        }
+    }
+
+    fn current_sync(&self, s: &Sample) -> f64 {
+        let (Some(tap), Some(st)) = (self.r.tap, self.stroke) else { return 0.0 };
+        if st.pos0 == i64::MIN {
+            return 0.0;
+        }
+        let div = if tap.diameter { 2.0 } else { 1.0 };
+        (s.axes[tap.slot] - st.pos0) as f64 / div - tap.lead_nm * st.revs
+    }
+
+    fn sync(&mut self, t: i64, s: &Sample) {
+        let Some(tap) = self.r.tap else { return };
+        let Some(st) = &mut self.stroke else { return };
+        if st.pos0 == i64::MIN {
+            *st = Stroke { pos0: s.axes[tap.slot], revs: 0.0, prev: (t, *s) };
+            return;
+        }
+        let (pt, p) = st.prev;
+        st.revs +=
+            unwrap_delta(p.spindle_mdeg, p.spindle_mrpm, s.spindle_mdeg, s.spindle_mrpm, t - pt) / 360_000.0;
+        st.prev = (t, *s);
+        let err = self.current_sync(s);
+        self.max_sync_nm = self.max_sync_nm.max(err.abs());
+        let tol = mm_nm(self.tol.sync_mm) as f64;
+        if err.abs() > tol {
+            let excess = err.abs() - tol;
+            let run = self.sync_run.get_or_insert(Run {
+                t_first: t,
+                t_worst: t,
+                excess: -1.0,
+                expected: String::new(),
+                actual: String::new(),
+                samples: 0,
+            });
+            run.samples += 1;
+            if excess > run.excess {
+                run.excess = excess;
+                run.t_worst = t;
+                run.expected = format!("|sync error| <= {} mm", fixed(mm_nm(self.tol.sync_mm), 6));
+                run.actual = format!("{} mm at {}", fixed(err.round() as i64, 6), ms(t.max(0) as u64));
+            }
+        } else {
+            self.close_sync();
+        }
+    }
+
+    fn close_sync(&mut self) {
+        if let Some(run) = self.sync_run.take() {
+            self.diverge(
+                Topic::Sync,
+                "CHK-SYNC-01",
+                format!("sync error ({} samples)", run.samples),
+                run.t_first,
+                run.expected,
+                run.actual,
+                format!("{} mm", fixed(run.excess.round() as i64, 6)),
+            );
+        }
+    }
+
+    fn envelope(&mut self, t: i64, s: &Sample) {
+        if t < 0 {
+            return;
+        }
+        let w = ms_us(self.tol.envelope_ms);
+        let tol = mm_nm(self.tol.position_mm) as f64;
+        let axes: Vec<_> = self.r.axes().to_vec();
+        for (k, a) in axes.iter().enumerate() {
+            let Some((lo, hi)) = self.r.range(t - w, t + w, a.index) else { continue };
+            let v = s.axes[a.index] as f64;
+            let excess = (lo - tol - v).max(v - hi - tol);
+            if excess > 0.0 {
+                self.max_env_nm = self.max_env_nm.max(excess);
+                let run = self.env_runs[k].get_or_insert(Run {
+                    t_first: t,
+                    t_worst: t,
+                    excess: -1.0,
+                    expected: String::new(),
+                    actual: String::new(),
+                    samples: 0,
+                });
+                run.samples += 1;
+                if excess > run.excess {
+                    run.excess = excess;
+                    run.t_worst = t;
+                    let unit = if a.rotary { "deg" } else { "mm" };
+                    run.expected = format!(
+                        "{} in [{}, {}] {unit} (reference ± {} ms ± {} mm)",
+                        a.letter,
+                        fixed(lo.round() as i64, 6),
+                        fixed(hi.round() as i64, 6),
+                        self.tol.envelope_ms,
+                        self.tol.position_mm
+                    );
+                    run.actual = format!("{} = {} {unit} at {}", a.letter, fixed(v as i64, 6), ms(t as u64));
+                }
+            } else {
+                self.close_env(k);
+            }
+        }
+    }
+
+    fn close_env(&mut self, k: usize) {
+        if let Some(run) = self.env_runs[k].take() {
+            let letter = self.r.axes()[k].letter;
+            let _ = run.t_worst;
+            self.diverge(
+                Topic::Envelope,
+                "CHK-ENV-01",
+                format!("{letter} position envelope ({} samples)", run.samples),
+                run.t_first,
+                run.expected,
+                run.actual,
+                format!("{} mm", fixed(run.excess.round() as i64, 6)),
+            );
+        }
+    }
+
+    /// Ends the stream: open runs are closed, unmatched reference events reported, key points
+    /// and the final state compared. Returns the compact recorded trace.
+    pub fn finish(&mut self) -> (Trace, super::keypoints::KeyPoints) {
+        if self.offset.is_none() {
+            self.give_up_anchor();
+            for p in std::mem::take(&mut self.pending) {
+                self.aligned(p);
+            }
+        }
+        self.close_sync();
+        for k in 0..self.env_runs.len() {
+            self.close_env(k);
+        }
+        if let Some(m) = self.matcher.take() {
+            self.matched = m.matched;
+            m.finish(&mut self.findings);
+        }
+        self.flush_findings();
+        let keys = std::mem::replace(&mut self.keys, KeyTracker::new(None)).finish();
+        super::keypoints_cmp::compare(self, &keys);
+        self.end_state();
+        (self.compact_trace(), keys)
+    }
+
+    fn end_state(&mut self) {
+        let Some(end) = self.r.trace.end() else { return };
+        let Some((t, s)) = self.last_sample else { return };
+        // The reference's speed when the recording stops (its final speed after its last sample).
+        let want = match self.r.t.last() {
+            Some(&tl) if t < tl => self.r.value_at(t, |x| x.spindle_mrpm).map_or(0, |v| v.round() as i64),
+            _ => end.state.spindle_mrpm,
+        };
+        let tol = (self.tol.speed_rpm * 1000.0).round() as i64;
+        if (s.spindle_mrpm - want).abs() > tol {
+            self.diverge(
+                Topic::End,
+                "CHK-END-01",
+                "final spindle speed".into(),
+                t.min(self.r.end_us),
+                format!("{} rpm ± {}", fixed(want, 3), self.tol.speed_rpm),
+                format!("{} rpm", fixed(s.spindle_mrpm, 3)),
+                format!("{} rpm", fixed((s.spindle_mrpm - want).abs() - tol, 3)),
+            );
+        }
+    }
+
+    fn compact_trace(&mut self) -> Trace {
+        let mut events = std::mem::take(&mut self.compact);
+        if !self.had_phases {
+            events.extend(
+                self.r
+                    .phases
+                    .iter()
+                    .map(|&(t, p)| TraceEvent { t_us: t.max(0) as u64, event: Event::Phase(p) }),
+            );
+        }
+        events.sort_by_key(|e| e.t_us);
+        let state = self.last_sample.map(|x| x.1).unwrap_or_default();
+        let reason = self.r.trace.end().map_or(nc_engine::trace::EndReason::Stopped, |e| e.reason.clone());
+        let t_end = self.last_t.max(events.last().map_or(0, |e| e.t_us as i64)).max(0) as u64;
+        events.push(TraceEvent {
+            t_us: t_end,
+            event: Event::End(EndSummary {
+                reason,
+                state,
+                command: state.axes,
+                signals: self.sig,
+                modal: Vec::new(),
+                alarms: self.alarms,
+                blocks: 0,
+            }),
+        });
+        Trace { meta: self.r.trace.meta.clone(), events }
+    }
+}
+
+/// Whether `ev` is the anchor.
+fn matches_anchor(a: &Anchor, ev: &Event) -> bool {
+    match (a, ev) {
+        (Anchor::Function(l, c), Event::Function { letter, code }) => l == letter && c == code,
+        (Anchor::Edge(s, v), Event::Signal { signal, value }) => s == signal && v == value,
+        _ => false,
+    }
+}

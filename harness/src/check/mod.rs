@@ -1,0 +1,201 @@
+//! `nc-conform check`: does a recorded controller trace behave as the reference says?
+//! (`docs/checking.md`)
+//!
+//! The reference [`Trace`] is kept in memory; the recorded trace arrives as a stream of
+//! [`TraceEvent`]s (from `crate::import` or any other source) and is never kept whole:
+//!
+//! - [`tolerance`]: tolerances, the alignment anchor, rule attribution;
+//! - [`reference`]: the reference indexed for interpolation, its tap axis and lead;
+//! - [`compare`]: the streaming comparator (alignment, events, sync error, envelope);
+//! - [`events`]: discrete-event matching; [`keypoints`], [`keypoints_cmp`]: key points;
+//! - [`report`]: JSON, JUnit XML and the human summary; [`html`]: the self-contained HTML page.
+//!
+//! The scenario's temporal rules run on a compact copy of the recorded trace through
+//! [`crate::scenario::expect::evaluate_discrete`].
+
+pub mod compare;
+pub mod events;
+pub mod html;
+pub mod keypoints;
+pub mod keypoints_cmp;
+pub mod reference;
+pub mod report;
+pub mod tolerance;
+
+use nc_engine::trace::{Signal, Trace, TraceEvent};
+use serde::Serialize;
+
+use crate::scenario::expect::{self, Expectations, Verdict};
+pub use tolerance::{Anchor, Tolerances};
+
+/// Most divergences listed one by one (the rest are counted).
+pub const MAX_DIVERGENCES: usize = 10_000;
+
+/// One way the recorded trace differs from the reference beyond tolerance.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Divergence {
+    /// The rule id it breaks (`GSK-RT-27`, `COM-PLC-05`, ...).
+    pub rule: String,
+    /// The comparison that found it (`CHK-EVT-01`, ..., `docs/checking.md`).
+    pub check: String,
+    /// What was compared.
+    pub what: String,
+    /// When, in the reference's time base (µs).
+    pub t_us: Option<i64>,
+    /// What the reference says, with its tolerance.
+    pub expected: String,
+    /// What was recorded.
+    pub actual: String,
+    /// How far beyond the tolerance.
+    pub margin: String,
+}
+
+/// One point of a plotted series (reference time base).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Point {
+    /// Time, µs.
+    pub t: i64,
+    /// Tap axis position, nm as reported.
+    pub tap: Option<i64>,
+    /// Spindle speed, milli-rpm.
+    pub rpm: i64,
+    /// Synchronisation error, nm (inside strokes).
+    pub sync_nm: Option<f64>,
+}
+
+/// What to compare against and how.
+#[derive(Debug, Clone, Default)]
+pub struct CheckSpec<'a> {
+    /// Tolerances.
+    pub tolerances: Tolerances,
+    /// The anchor (None: the first M29, else the first cycle start STL ↑).
+    pub anchor: Option<Anchor>,
+    /// The scenario's expectations, whose temporal rules run on the recorded trace.
+    pub expect: Option<&'a Expectations>,
+    /// The scenario's rule ids (preferred in attribution).
+    pub rules: Vec<String>,
+}
+
+/// Counts and extremes of a comparison.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Figures {
+    /// Recorded events read.
+    pub recorded_events: u64,
+    /// Recorded samples read.
+    pub recorded_samples: u64,
+    /// Reference discrete events (edges, functions, alarms).
+    pub reference_events: usize,
+    /// Of those, matched by a recorded event.
+    pub matched_events: usize,
+    /// Largest |sync error|, mm.
+    pub max_sync_error_mm: f64,
+    /// Largest position excess beyond the envelope, mm.
+    pub max_envelope_excess_mm: f64,
+    /// Pecks (cuts) in the reference / recorded.
+    pub pecks: (usize, usize),
+}
+
+/// The outcome of a comparison.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// Every divergence, in the order found (see [`Report::sorted`]).
+    pub divergences: Vec<Divergence>,
+    /// Divergences beyond [`MAX_DIVERGENCES`], not listed.
+    pub omitted: usize,
+    /// The scenario's temporal rules on the recorded trace.
+    pub rules: Vec<Verdict>,
+    /// The anchor used.
+    pub anchor: String,
+    /// Reference time = recorded time + offset, µs.
+    pub offset_us: i64,
+    /// The tolerances used.
+    pub tolerances: Tolerances,
+    /// Counts and extremes.
+    pub figures: Figures,
+    /// The compact recorded trace, aligned (for diagrams).
+    #[serde(skip)]
+    pub recorded: Trace,
+    /// Plot points of the recorded trace.
+    #[serde(skip)]
+    pub series: Vec<Point>,
+}
+
+impl Report {
+    /// No divergence.
+    pub fn conformant(&self) -> bool {
+        self.divergences.is_empty() && self.omitted == 0
+    }
+
+    /// The divergences by time (those without a time last).
+    pub fn sorted(&self) -> Vec<&Divergence> {
+        let mut v: Vec<_> = self.divergences.iter().collect();
+        v.sort_by_key(|d| d.t_us.unwrap_or(i64::MAX));
+        v
+    }
+
+    /// Whether a divergence cites `rule`.
+    pub fn has_rule(&self, rule: &str) -> bool {
+        self.divergences.iter().any(|d| d.rule == rule)
+    }
+}
+
+/// The default anchor for `reference`: its first M29, else its first STL ↑, else offset 0.
+pub fn default_anchor(reference: &Trace) -> Anchor {
+    if reference.functions().any(|(_, l, c)| l == 'M' && c == 29) {
+        Anchor::Function('M', 29)
+    } else if reference.edges(Signal::Stl).any(|(_, v)| v) {
+        Anchor::Edge(Signal::Stl, true)
+    } else {
+        Anchor::Offset(0)
+    }
+}
+
+/// Compares the recorded events (time as recorded, in order) with `reference`.
+pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, spec: &CheckSpec) -> Report {
+    let r = reference::Reference::new(reference);
+    let anchor = spec.anchor.clone().unwrap_or_else(|| default_anchor(reference));
+    let mut c = compare::Comparator::new(&r, spec.tolerances.clone(), anchor.clone(), spec.rules.clone());
+    for ev in recorded {
+        c.event(ev);
+    }
+    let (compact, keys) = c.finish();
+    let mut rules = Vec::new();
+    if let Some(exp) = spec.expect {
+        rules = expect::evaluate_discrete(exp, &compact);
+        for v in rules.iter().filter(|v| !v.pass) {
+            c.push(Divergence {
+                rule: v.rule.clone(),
+                check: "CHK-RULE-01".into(),
+                what: format!("scenario {}", v.what),
+                t_us: v.t_us.map(|t| t as i64),
+                expected: v.expected.clone(),
+                actual: v.actual.clone(),
+                margin: "-".into(),
+            });
+        }
+    }
+    let figures = Figures {
+        recorded_events: c.events_seen,
+        recorded_samples: c.samples_seen,
+        reference_events: compare_totals(reference),
+        matched_events: 0,
+        max_sync_error_mm: c.max_sync_nm / 1e6,
+        max_envelope_excess_mm: c.max_env_nm / 1e6,
+        pecks: (r.keys.pecks().len(), keys.pecks().len()),
+    };
+    Report {
+        divergences: std::mem::take(&mut c.divergences),
+        omitted: c.omitted,
+        rules,
+        anchor: if c.anchored { anchor.describe() } else { format!("{} (not found)", anchor.describe()) },
+        offset_us: c.offset(),
+        tolerances: spec.tolerances.clone(),
+        figures: Figures { matched_events: c.matched(), ..figures },
+        recorded: compact,
+        series: std::mem::take(&mut c.series),
+    }
+}
+
+fn compare_totals(reference: &Trace) -> usize {
+    reference.events.iter().filter(|e| events::Key::of(&e.event).is_some()).count()
+}
