@@ -41,6 +41,10 @@ pub fn fanuc_holes(holes: usize) -> String {
     s
 }
 
+/// A KND G93 program (examples/knd_g93.nc): two holes, M10×1.5 at 300 rpm.
+const KND_G93: &str =
+    "G98;\nG00 X100 Z100;\nM03 S300;\nG00 X0 Z5;\nM08;\nG93 Z-20 F1.5;\nW-25;\nG00 Z100;\nM09;\nM05;\nM30;\n";
+
 fn run_once(m: &Machine, prog: &nc_engine::Program, opts: &RunOptions) -> CountSink {
     let mut sink = CountSink::default();
     m.run(prog, opts, &mut sink);
@@ -56,6 +60,16 @@ fn benches(c: &mut Criterion) {
     let mut g = c.benchmark_group("realtime_factor");
     g.throughput(Throughput::Elements(probe.last_t));
     g.bench_function("gsk_g88_peck_1ms_samples", |b| b.iter(|| run_once(&m, &prog, &opts)));
+    g.finish();
+
+    // knd-lathe: the seed-001 G93 program (cut, brake overshoot, ZSP wait, return, M03 again).
+    let km = Machine::new("knd-lathe").unwrap();
+    let kprog = km.parse(KND_G93).unwrap();
+    let probe = run_once(&km, &kprog, &opts);
+    eprintln!("knd g93: {} µs simulated, {} events, {} samples", probe.last_t, probe.events, probe.samples);
+    let mut g = c.benchmark_group("realtime_factor");
+    g.throughput(Throughput::Elements(probe.last_t));
+    g.bench_function("knd_g93_1ms_samples", |b| b.iter(|| run_once(&km, &kprog, &opts)));
     g.finish();
 
     let fm = Machine::new("fanuc-mill").unwrap();
