@@ -24,6 +24,9 @@ fn conformant_traces_with_jitter_noise_and_lost_samples_pass() {
         "scenarios/gsk/clamp/clamp_codes_frame_the_hole.yaml",
         "scenarios/gsk/overload/spindle_current_retracts.yaml",
         "scenarios/common/inp/reset_during_rigid_tapping.yaml",
+        "scenarios/gsk/dry_run/tapping_unchanged_by_dry_run.yaml",
+        "scenarios/gsk/machine_lock/tap_under_machine_lock.yaml",
+        "scenarios/knd/g93/standard.yaml",
     ] {
         let s = scenario(rel);
         let reference = reference(&s);
@@ -254,5 +257,42 @@ fn spindle_not_restored_after_reset_is_caught_gsk_rt_25() {
 }
 
 #[test]
-#[ignore = "the KND dialect does not exist yet: its `tap keeps going in and never retracts` defect has no reference to derive from"]
-fn knd_tap_never_retracts() {}
+fn knd_tap_keeps_going_in_and_never_retracts_is_caught_knd_g93_07() {
+    let s = scenario("scenarios/knd/g93/standard.yaml");
+    let reference = reference(&s);
+    let (t_ret, _) = phase_spans(&reference, Phase::Retract)[0];
+    let at = sample_before(&reference, t_ret);
+    let z = 2; // Z slot
+               // The controller of the forum: the tap goes on into the hole at 1.5 mm per 200 ms and never
+               // comes back; nothing else happens after the end point.
+    let mut t = reference.clone();
+    t.events.retain(|e| e.t_us <= t_ret || matches!(e.event, Event::Sample(_)));
+    for e in t.events.iter_mut().filter(|e| e.t_us > t_ret) {
+        if let Event::Sample(smp) = &mut e.event {
+            *smp = at;
+            smp.axes[z] -= ((e.t_us - t_ret) as i64 * 7_500 / 1000).min(5_000_000);
+        }
+    }
+    let r = check(&s, &reference, record(&t, Rec::REALISTIC));
+    caught(&r, &reference, "KND-G93-07");
+}
+
+#[test]
+fn a_recording_far_longer_than_the_reference_is_streamed_in_bounded_memory() {
+    let s = scenario("scenarios/common/doc_examples/quick_start.yaml");
+    let reference = reference(&s);
+    let head = record(&reference, Rec::EXACT);
+    let last = *reference.samples().last().unwrap().1;
+    let end = reference.events.last().unwrap().t_us;
+    // Ten minutes more of samples at 1 ms, produced lazily: the controller never stops.
+    let tail = (1..=600_000u64).map(move |k| TraceEvent { t_us: end + k * 1000, event: Event::Sample(last) });
+    let r = nc_conform::check::check(&reference, head.into_iter().chain(tail), &Default::default());
+    assert!(r.figures.recorded_samples > 600_000);
+    assert!(
+        r.recorded.events.len() < 4 * reference.events.len(),
+        "compact copy: {}",
+        r.recorded.events.len()
+    );
+    assert!(r.series.len() < 4000, "plot points: {}", r.series.len());
+    assert!(r.conformant(), "{}", show(&r, &reference));
+}

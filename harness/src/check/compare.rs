@@ -142,6 +142,7 @@ impl<'r> Comparator<'r> {
             inputs: self.r.inputs_at(t),
             overload: self.r.overload_by(t),
             scenario_rules: self.rules.clone(),
+            phase: Some(self.r.phase_at(t)),
         }
     }
 

@@ -14,7 +14,7 @@ use crate::scenario::timeline::ms;
 const W: f64 = 1200.0;
 const H: f64 = 220.0;
 const LEFT: f64 = 80.0;
-const RIGHT: f64 = 20.0;
+const RIGHT: f64 = 60.0;
 const TOP: f64 = 28.0;
 const BOTTOM: f64 = 30.0;
 
@@ -226,8 +226,8 @@ pub fn page(rep: &Report, reference: &Trace, title: &str) -> String {
     }
     let f = &rep.figures;
     format!(
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>nc-conform check: {t}</title>\n<style>\nbody{{font-family:sans-serif;margin:16px;color:#222}}\n.verdict{{font-weight:bold;font-size:20px}}\n.CONFORMANT{{color:#187a2f}}.DIVERGENT{{color:#c0161b}}\n.plot{{display:block;margin:8px 0;background:#fff}}\n.frame{{fill:#fafafa;stroke:#999}}\n.series{{fill:none;stroke-width:1.4}}\n.limit{{stroke:#c0161b;stroke-dasharray:3 3}}\n.divergence line{{stroke:#c0161b;stroke-width:1;stroke-dasharray:4 2}}\n.divergence text{{fill:#c0161b;font-size:10px}}\n.title{{font-size:13px;font-weight:bold}}\n.tick,.legend{{font-size:11px}}\ntable{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}\n</style>\n</head>\n<body>\n<h1>nc-conform check</h1>\n<p>{t}</p>\n<p class=\"verdict {verdict}\">{verdict}: {n} divergence(s)</p>\n<p>Aligned on the {anchor} (reference = recorded {off:+} µs). {ev} recorded events, {sm} samples; {mt}/{rt} reference events matched; max sync error {sync:.6} mm.</p>\n{body}<table id=\"divergences\">\n<tr><th>#</th><th>rule</th><th>check</th><th>time</th><th>what</th><th>expected</th><th>actual</th><th>margin</th></tr>\n{rows}</table>\n</body>\n</html>\n",
-        t = xml_escape(title),
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>nc-conform check: {t}</title>\n<style>\nbody{{font-family:sans-serif;margin:16px;color:#222}}\n.verdict{{font-weight:bold;font-size:20px}}\n.CONFORMANT{{color:#187a2f}}.DIVERGENT{{color:#c0161b}}\n.plot{{display:block;margin:8px 0;background:#fff}}\n.frame{{fill:#fafafa;stroke:#999}}\n.series{{fill:none;stroke-width:1.4}}\n.series[data-series=reference]{{stroke-width:4;stroke-opacity:0.45}}\n.limit{{stroke:#c0161b;stroke-dasharray:3 3}}\n.divergence line{{stroke:#c0161b;stroke-width:1;stroke-dasharray:4 2}}\n.divergence text{{fill:#c0161b;font-size:10px}}\n.title{{font-size:13px;font-weight:bold}}\n.tick,.legend{{font-size:11px}}\ntable{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:left}}\n</style>\n</head>\n<body>\n<h1>nc-conform check</h1>\n<p>{t}</p>\n<p class=\"verdict {verdict}\">{verdict}: {n} divergence(s)</p>\n<p>Aligned on the {anchor} (reference = recorded {off:+} µs). {ev} recorded events, {sm} samples; {mt}/{rt} reference events matched; max sync error {sync:.6} mm.</p>\n{body}<table id=\"divergences\">\n<tr><th>#</th><th>rule</th><th>check</th><th>time</th><th>what</th><th>expected</th><th>actual</th><th>margin</th></tr>\n{rows}</table>\n</body>\n</html>\n",
+        t = xml_escape(&title.replace('\n', " · ")),
         n = rep.divergences.len() + rep.omitted,
         anchor = xml_escape(&rep.anchor),
         off = rep.offset_us,

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use nc_engine::trace::Signal;
+use nc_engine::trace::{Phase, Signal};
 use serde::{Deserialize, Serialize};
 
 /// How far a recorded trace may stray from the reference before it diverges.
@@ -146,6 +146,8 @@ pub struct Context {
     pub overload: bool,
     /// The scenario's rule ids (preferred when several candidates fit).
     pub scenario_rules: Vec<String>,
+    /// The reference's phase at that time.
+    pub phase: Option<Phase>,
 }
 
 /// The M codes that are not spindle clamp codes.
@@ -157,6 +159,19 @@ pub fn attribute(topic: Topic, ctx: &Context) -> String {
     let pick = |g: &'static str, f: &'static str| if gsk { g } else { f };
     let has = |name: &str| ctx.inputs.iter().any(|i| i == name);
     let mut cands: Vec<&str> = Vec::new();
+    if ctx.dialect.starts_with("knd") {
+        // KND G93: the tap follows the spindle in speed mode (no RGSPP/RGSPM strokes).
+        match (topic, ctx.phase) {
+            (Topic::Edge(Signal::Zsp, _), _) => cands.push("KND-G93-06"),
+            (Topic::Envelope | Topic::Bottom | Topic::Sync, Some(Phase::Retract)) => cands.push("KND-G93-07"),
+            (Topic::Envelope | Topic::Bottom | Topic::Sync, Some(Phase::Dwell)) => {
+                cands.extend(["KND-G93-04", "KND-G93-05"])
+            }
+            (Topic::Envelope | Topic::Bottom | Topic::Sync, Some(Phase::Cutting)) => cands.push("KND-G93-03"),
+            (Topic::Function('M', 3 | 4), _) => cands.push("KND-G93-09"),
+            _ => {}
+        }
+    }
     if let Topic::Edge(Signal::Spl | Signal::Stl, _) = topic {
         cands.push(pick("GSK-RT-27", "FAN-RT-15"));
     }
@@ -231,6 +246,8 @@ mod tests {
 
     #[test]
     fn attribution_prefers_context_and_scenario_rules() {
+        let knd = Context { dialect: "knd-lathe".into(), phase: Some(Phase::Retract), ..Context::default() };
+        assert_eq!(attribute(Topic::Envelope, &knd), "KND-G93-07");
         let mut ctx = Context { dialect: "gsk-lathe".into(), ..Context::default() };
         assert_eq!(attribute(Topic::Function('M', 68), &ctx), "GSK-RT-11");
         assert_eq!(attribute(Topic::Edge(Signal::Rgtap, false), &ctx), "COM-PLC-05");
