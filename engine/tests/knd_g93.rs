@@ -119,3 +119,38 @@ fn knd_lex_basics_run_and_refusals_are_located() {
         assert_eq!(t.alarms().next().unwrap().1.line, Some(line), "{p}");
     }
 }
+
+#[test]
+fn knd_g93_inputs_at_any_phase_end_the_run_and_keep_the_invariants() {
+    // Operator inputs and faults dropped into every part of the cycle (cut, brake, ZSP wait,
+    // return, resume): the run always ends, time-ordered, with no invariant violated.
+    use nc_engine::invariants::{check, Context};
+    let inputs = [
+        Input::Reset,
+        Input::FeedHold,
+        Input::EmergencyStop(true),
+        Input::SpindleStall(true),
+        Input::MachineLock(true),
+        Input::DryRun(true),
+        Input::SingleBlock(true),
+        Input::FeedOverride(0),
+        Input::SpindleOverride(50),
+    ];
+    for input in inputs {
+        for at_ms in [100u64, 1_000, 3_700, 3_858, 3_900, 5_000, 7_455, 7_460] {
+            let sched = InputSchedule::default().at(at_ms * 1000, input.clone());
+            let opts = RunOptions {
+                inputs: sched,
+                sample_us: 1000,
+                time_limit_us: 120_000_000,
+                auto_cycle_start: true,
+                ..RunOptions::default()
+            };
+            let t = run("knd-lathe", &[("nc.backlash_mm", Some('Z'), 0.02)], G93, &opts);
+            assert!(t.end().is_some(), "{input:?} at {at_ms} ms: no end");
+            let ctx = Context { tap: None, range_alarm: None, pre_m29_mrpm: None, hold_suppressed: true };
+            let v = check(&t, &ctx);
+            assert!(v.is_empty(), "{input:?} at {at_ms} ms: {v:?}");
+        }
+    }
+}
