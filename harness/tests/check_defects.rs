@@ -117,6 +117,14 @@ fn late_retract_after_overload_is_caught_gsk_rt_26() {
     let defective = late.machine.run_to_trace(&late.program, &late.opts);
     let r = check(&s, &reference, record(&defective, Rec::REALISTIC));
     caught(&r, &reference, "GSK-RT-26");
+    // The deeper hole and the late return themselves, not only the late alarm, cite GSK-RT-26.
+    for check in ["CHK-KEY-04", "CHK-ENV-01"] {
+        assert!(
+            r.divergences.iter().any(|d| d.check == check && d.rule == "GSK-RT-26"),
+            "{check}:\n{}",
+            show(&r, &reference)
+        );
+    }
 }
 
 #[test]

@@ -140,7 +140,9 @@ impl<'r> Comparator<'r> {
         Context {
             dialect: self.dialect.clone(),
             inputs: self.r.inputs_at(t),
-            overload: self.r.overload_by(t),
+            // An overload retract starting within the envelope's slack counts: a late retract
+            // shows in the envelope before the reference's retract phase begins.
+            overload: self.r.overload_by(t + ms_us(self.tol.envelope_ms).max(ms_us(self.tol.event_ms))),
             scenario_rules: self.rules.clone(),
             phase: Some(self.r.phase_at(t)),
         }
@@ -455,16 +457,20 @@ impl<'r> Comparator<'r> {
     fn close_env(&mut self, k: usize) {
         if let Some(run) = self.env_runs[k].take() {
             let letter = self.r.axes()[k].letter;
-            let _ = run.t_worst;
-            self.diverge(
-                Topic::Envelope,
-                "CHK-ENV-01",
-                format!("{letter} position envelope ({} samples)", run.samples),
-                run.t_first,
-                run.expected,
-                run.actual,
-                format!("{} mm", fixed(run.excess.round() as i64, 6)),
-            );
+            // Attributed where the run starts, but an overload retract begun by its worst point
+            // counts: a late retract strays before the reference's retract phase begins.
+            let mut ctx = self.context(run.t_first);
+            ctx.overload |= self.r.overload_by(run.t_worst);
+            let rule = attribute(Topic::Envelope, &ctx);
+            self.push(Divergence {
+                rule,
+                check: "CHK-ENV-01".into(),
+                what: format!("{letter} position envelope ({} samples)", run.samples),
+                t_us: Some(run.t_first),
+                expected: run.expected,
+                actual: run.actual,
+                margin: format!("{} mm", fixed(run.excess.round() as i64, 6)),
+            });
         }
     }
 

@@ -44,13 +44,21 @@ pub struct KeyPoints {
 }
 
 impl KeyPoints {
-    /// Depth reached by each cut (time, depth, uncertainty).
+    /// Depth reached by each cut (the time its stroke ended, depth, uncertainty).
     pub fn pecks(&self) -> Vec<(i64, Option<i64>, i64)> {
-        self.segments.iter().filter(|s| s.into).map(|s| (s.t_start, s.deepest, s.deep_unc)).collect()
+        self.segments
+            .iter()
+            .filter(|s| s.into)
+            .map(|s| (s.t_stop.unwrap_or(s.t_start), s.deepest, s.deep_unc))
+            .collect()
     }
-    /// Height reached by each retract (time, depth, uncertainty).
+    /// Height reached by each retract (the time its stroke ended, depth, uncertainty).
     pub fn retracts(&self) -> Vec<(i64, Option<i64>, i64)> {
-        self.segments.iter().filter(|s| !s.into).map(|s| (s.t_start, s.shallowest, s.shallow_unc)).collect()
+        self.segments
+            .iter()
+            .filter(|s| !s.into)
+            .map(|s| (s.t_stop.unwrap_or(s.t_start), s.shallowest, s.shallow_unc))
+            .collect()
     }
     /// The pause at the bottom of each cut followed by a retract: from the cut's end to the
     /// retract's start (the dwell P plus the reversal), with the time of the cut's end.
