@@ -3,9 +3,9 @@
 //! sample), a CSV export of a real run, and a generated multi-million-row CSV streamed without
 //! collecting (memory stays flat: see `examples/import_rss.rs` for the peak RSS figure).
 
-use std::io::{BufRead, Cursor, Read};
+use std::io::Cursor;
 
-use nc_conform::import::{from_reader, ColumnMap, Format, Options};
+use nc_conform::import::{from_reader, gen, ColumnMap, Format, Options};
 use nc_conform::jsonl::JsonlWriter;
 use nc_conform::render::vcd::write_vcd;
 use nc_engine::trace::{Event, Signal, Trace, TraceEvent};
@@ -170,86 +170,12 @@ fn csv_export_of_a_run_reads_back() {
     assert_eq!(rtap, trace.edges(Signal::Rtap).count());
 }
 
-/// A generator of `rows` CSV rows (8 columns, 1 kHz), read as a stream.
-pub struct GenCsv {
-    row: u64,
-    rows: u64,
-    buf: Vec<u8>,
-    pos: usize,
-}
-
-impl GenCsv {
-    pub fn new(rows: u64) -> Self {
-        let mut buf = Vec::new();
-        buf.extend_from_slice(b"time_ms,X,Y,Z,S_rpm,S_deg,flags,load\n");
-        GenCsv { row: 0, rows, buf, pos: 0 }
-    }
-
-    fn refill(&mut self) {
-        self.buf.clear();
-        self.pos = 0;
-        while self.buf.len() < 64 * 1024 && self.row < self.rows {
-            let r = self.row;
-            let z = -((r % 20_000) as f64) * 0.0015;
-            let line = format!(
-                "{r},{}.{:03},12.5,{z:.6},{},{}.{},{},{}\n",
-                r % 100,
-                r % 1000,
-                (r % 3000) as i64 - 1500,
-                r % 360,
-                r % 10,
-                (r / 500) % 16,
-                r % 97
-            );
-            self.buf.extend_from_slice(line.as_bytes());
-            self.row += 1;
-        }
-    }
-}
-
-impl Read for GenCsv {
-    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
-        let n = self.fill_buf()?.len().min(out.len());
-        out[..n].copy_from_slice(&self.buf[self.pos..self.pos + n]);
-        self.consume(n);
-        Ok(n)
-    }
-}
-
-impl BufRead for GenCsv {
-    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
-        if self.pos >= self.buf.len() {
-            self.refill();
-        }
-        Ok(&self.buf[self.pos..])
-    }
-    fn consume(&mut self, n: usize) {
-        self.pos += n;
-    }
-}
-
-/// The column map of [`GenCsv`].
-pub const GEN_MAP: &str = "\
-time: {column: time_ms, unit: ms}
-axes:
-  - {axis: X, column: X}
-  - {axis: Y, column: Y}
-  - {axis: Z, column: Z}
-spindle:
-  rpm: {column: S_rpm}
-  angle_deg: {column: S_deg}
-signals:
-  - {signal: F76.3, column: flags, bit: 3}
-  - {signal: RGTAP, column: flags, bit: 0}
-ignore: [load]
-";
-
 #[test]
 fn a_multi_million_row_csv_streams() {
     let rows = 2_000_000;
-    let map = ColumnMap::from_yaml("gen.yaml", GEN_MAP).expect("map");
+    let map = ColumnMap::from_yaml("gen.yaml", gen::MAP).expect("map");
     let opts = Options { format: None, map: Some(&map), lenient: false };
-    let imp = from_reader("gen.csv", Box::new(GenCsv::new(rows)), &opts).expect("opens");
+    let imp = from_reader("gen.csv", Box::new(gen::GenCsv::new(rows)), &opts).expect("opens");
     let (mut samples, mut edges, mut last) = (0u64, 0u64, 0u64);
     for ev in imp {
         let ev = ev.expect("a good row");
@@ -263,6 +189,7 @@ fn a_multi_million_row_csv_streams() {
     }
     assert_eq!(samples, rows);
     assert_eq!(last, (rows - 1) * 1000);
-    // flags counts 0..15 every 500 rows: bit 0 toggles every 500 rows, bit 3 every 4000.
-    assert_eq!(edges, (rows / 500 - 1) + (rows / 4000 - 1));
+    // flags = (r % 1000 / 50) % 16: bit 0 changes every 50 rows (from row 50 on), bit 3 twice
+    // per 1000 rows (rows 400 and 800).
+    assert_eq!(edges, (rows / 50 - 1) + rows / 1000 * 2);
 }

@@ -16,6 +16,7 @@
 pub mod csv;
 pub mod error;
 pub mod fuzz;
+pub mod gen;
 pub mod jsonl;
 pub mod map;
 pub mod num;
