@@ -27,6 +27,10 @@ fn conformant_traces_with_jitter_noise_and_lost_samples_pass() {
         "scenarios/gsk/dry_run/tapping_unchanged_by_dry_run.yaml",
         "scenarios/gsk/machine_lock/tap_under_machine_lock.yaml",
         "scenarios/knd/g93/standard.yaml",
+        "scenarios/fanuc/seed/peck_rigid_example.yaml",
+        "scenarios/fanuc/seed/usage_two_holes_g99_g98.yaml",
+        "scenarios/fanuc/rigid/g74_left_hand.yaml",
+        "scenarios/fanuc/rigid/peck_pcp0_high_speed.yaml",
     ] {
         let s = scenario(rel);
         let reference = reference(&s);
