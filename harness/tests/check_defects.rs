@@ -308,3 +308,23 @@ fn a_recording_far_longer_than_the_reference_is_streamed_in_bounded_memory() {
     assert!(r.series.len() < 4000, "plot points: {}", r.series.len());
     assert!(r.conformant(), "{}", show(&r, &reference));
 }
+
+#[test]
+fn alignment_by_offset_or_another_anchor_and_a_missing_anchor() {
+    use nc_conform::check::{Anchor, CheckSpec};
+    let s = scenario("scenarios/gsk/peck/high_speed_seed_example.yaml");
+    let reference = reference(&s);
+    let rec = record(&reference, Rec::REALISTIC);
+    let shift = Rec::REALISTIC.shift_us as i64;
+    for anchor in [Anchor::Offset(-shift), Anchor::Edge(Signal::Rgtap, true), Anchor::Function('M', 29)] {
+        let spec = CheckSpec { anchor: Some(anchor.clone()), expect: Some(&s.expect), ..Default::default() };
+        let r = nc_conform::check::check(&reference, rec.clone(), &spec);
+        assert!(r.conformant(), "{anchor:?}:\n{}", show(&r, &reference));
+        assert!((r.offset_us + shift).abs() <= 1000, "{anchor:?}: offset {}", r.offset_us);
+    }
+    // A recording without any M29: aligned on its first event, and said so.
+    let no_m29: Vec<TraceEvent> =
+        rec.into_iter().filter(|e| !matches!(e.event, Event::Function { letter: 'M', code: 29 })).collect();
+    let r = nc_conform::check::check(&reference, no_m29, &CheckSpec::default());
+    assert!(r.divergences.iter().any(|d| d.check == "CHK-ALIGN-01"), "{}", show(&r, &reference));
+}
