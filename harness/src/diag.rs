@@ -51,6 +51,15 @@ fn line_start_offset(text: &str, line: u32) -> usize {
     text.match_indices('\n').nth(line as usize - 2).map_or(text.len(), |(i, _)| i + 1)
 }
 
+/// The largest char boundary of `s` at or before `i` (clamped to the end of `s`).
+fn floor_char_boundary(s: &str, i: usize) -> usize {
+    let mut i = i.min(s.len());
+    while !s.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
+}
+
 /// An error in something the user gave the harness.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InputError {
@@ -106,17 +115,22 @@ impl InputError {
     pub fn render_plain(&self) -> String {
         let mut out = format!("error: {}\n", self.headline());
         if let Some((span, source)) = &self.at {
-            let start = line_start_offset(source, span.line);
+            // The text line holding the span's first byte. Found from the offset, not the line
+            // number: YAML also breaks lines at a lone CR, so a YAML location's line number may
+            // not count `\n`s (found by fuzzing). Every index is kept on a char boundary.
+            let offset = floor_char_boundary(source, span.offset);
+            let start = source[..offset].rfind('\n').map_or(0, |i| i + 1);
             let line_text = source[start..].split('\n').next().unwrap_or("");
             let line_text = line_text.strip_suffix('\r').unwrap_or(line_text);
             let num = span.line.to_string();
             let pad = " ".repeat(num.len());
             let _ = writeln!(out, "{pad} |");
             let _ = writeln!(out, "{num} | {line_text}");
-            let in_line = span.offset.saturating_sub(start).min(line_text.len());
+            let in_line = floor_char_boundary(line_text, offset - start);
+            let end = floor_char_boundary(line_text, in_line.saturating_add(span.len));
             let prefix: String =
                 line_text[..in_line].chars().map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
-            let width = line_text[in_line..(in_line + span.len).min(line_text.len())].chars().count().max(1);
+            let width = line_text[in_line..end].chars().count().max(1);
             let _ = writeln!(out, "{pad} | {prefix}{}", "^".repeat(width));
         }
         out
@@ -175,12 +189,17 @@ impl From<&InputError> for Fancy {
         let headline = format!("{}: {}", e.location(), e.message);
         let label = e.expected.as_deref().map_or_else(|| "here".to_string(), |x| format!("expected {x}"));
         match &e.at {
-            Some((span, text)) => Fancy {
-                headline,
-                src: Some(miette::NamedSource::new(&e.file, text.clone())),
-                span: Some(miette::SourceSpan::new(span.offset.into(), span.len)),
-                label,
-            },
+            Some((span, text)) => {
+                // Kept inside the text and on char boundaries, whatever the span says.
+                let start = floor_char_boundary(text, span.offset);
+                let end = floor_char_boundary(text, span.offset.saturating_add(span.len)).max(start);
+                Fancy {
+                    headline,
+                    src: Some(miette::NamedSource::new(&e.file, text.clone())),
+                    span: Some(miette::SourceSpan::new(start.into(), end - start)),
+                    label,
+                }
+            }
             None => Fancy {
                 headline: match &e.expected {
                     Some(x) => format!("{headline}; expected {x}"),
@@ -243,6 +262,21 @@ mod tests {
         assert!(text.contains("#1=5"), "{text}");
         assert!(text.contains("expected a word letter"), "{text}");
         assert!(!text.contains('\x1b'), "{text}");
+    }
+
+    #[test]
+    fn a_span_off_its_line_or_inside_a_character_renders() {
+        // A YAML location after a lone CR: line 2 for YAML, still line 1 by `\n`; the offset
+        // decides which text is shown. Then spans that end or start inside `é` (2 bytes).
+        let src = "a: 1\rbé: 2\nc: 3\n";
+        let span = Span { line: 2, col: 1, offset: 5, len: 3 };
+        let text = InputError::at("s.yaml", src, span, "unknown field", None).render_plain();
+        assert!(text.contains("2 | a: 1\rbé: 2\n"), "{text}");
+        for (offset, len) in [(5, 2), (7, 1), (7, 99), (99, 1), (0, usize::MAX)] {
+            let e = InputError::at("s.yaml", src, Span { line: 9, col: 1, offset, len }, "m", None);
+            assert!(e.render_plain().starts_with("error: s.yaml:9:1: m"));
+            assert!(e.render_fancy(false).contains("s.yaml:9:1: m"));
+        }
     }
 
     #[test]
