@@ -67,6 +67,7 @@ impl Exec<'_> {
                 self.stall_angle = None;
                 let spin = rpm.signum();
                 self.start_motion(target, Path::Tap { profile, axis: f.axis, backlash: 0.0, lead, spin });
+                self.free_spindle();
                 if over {
                     let a = Alarm::new(
                         f.alarm,
@@ -90,13 +91,21 @@ impl Exec<'_> {
                 let profile = Profile::trapezoid(d.unsigned_abs() as f64 + b, v, a_rpm * lead / 60e6, period);
                 self.spindle.hold(now, angle);
                 self.stall_angle = None;
-                if !self.machine_lock {
-                    self.set_signal(Signal::Zsp, false);
-                }
+                // The spindle is in speed mode: machine lock holds the axis, not the spindle
+                // (COM-MOT-04, KND-G93-03), so it turns and the drive reports it.
+                self.set_signal(Signal::Zsp, false);
                 target[f.axis] = f.target;
                 let spin = if forward { 1.0 } else { -1.0 };
                 self.start_motion(target, Path::Tap { profile, axis: f.axis, backlash: b, lead, spin });
+                self.free_spindle();
             }
+        }
+    }
+
+    /// The motion just started keeps its spindle turning under machine lock (speed mode).
+    fn free_spindle(&mut self) {
+        if let Some(m) = &mut self.motion {
+            m.lock_spindle = false;
         }
     }
 

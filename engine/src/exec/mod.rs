@@ -435,7 +435,7 @@ impl Exec<'_> {
     fn spindle_at(&self, t: Micros) -> (f64, f64) {
         if let Some(m) = &self.motion {
             if let Some((da, rpm)) = m.spindle(t) {
-                if m.locked {
+                if m.locked && m.lock_spindle {
                     return (self.spindle.angle0, 0.0);
                 }
                 if let Some(a) = self.stall_angle {

@@ -77,6 +77,9 @@ pub struct Motion {
     /// Machine lock was on when the motion started: the machine stays still for the whole motion
     /// (COM-MOT-04). A lock switched during a motion acts from the next one (COM-INP-10).
     pub locked: bool,
+    /// Under that lock the spindle stands too: a rigid tapping stroke, whose spindle is an axis in
+    /// position mode (COM-MOT-04). A speed-mode spindle that the axis follows (KND G93) turns.
+    pub lock_spindle: bool,
 }
 
 impl Motion {
@@ -202,7 +205,15 @@ mod tests {
         let mut target = [0; AXES];
         target[2] = -20_000_000;
         let path = Path::Line { profile: Profile::trapezoid(len, v, a, 1000), len };
-        let mut m = Motion { t0: 0, start: [0; AXES], target, path_end: target, path, locked: false };
+        let mut m = Motion {
+            t0: 0,
+            start: [0; AXES],
+            target,
+            path_end: target,
+            path,
+            locked: false,
+            lock_spindle: false,
+        };
         let before = m.pos(300_000)[2];
         m.stop_at(300_000, a, 1000);
         // From 20 mm/s at 1000 mm/s² the stop takes 20 ms and 0.2 mm.

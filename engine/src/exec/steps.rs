@@ -326,6 +326,7 @@ impl Exec<'_> {
             path_end: target,
             path,
             locked: self.machine_lock,
+            lock_spindle: self.machine_lock,
         };
         if m.duration() == 0 {
             self.cmd = target;
@@ -348,7 +349,7 @@ impl Exec<'_> {
         if let Some((da, _)) = m.spindle(end) {
             let angle = match self.stall_angle.take() {
                 Some(a) => a,
-                None if m.locked => self.spindle.angle0,
+                None if m.locked && m.lock_spindle => self.spindle.angle0,
                 None => self.spindle.angle0 + da,
             };
             self.spindle.hold(end, angle);

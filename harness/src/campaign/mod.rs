@@ -2,7 +2,8 @@
 //! reference engine, every run checked against the invariants of `nc_engine::invariants`
 //! (`docs/invariants.md`), every failure shrunk to a minimal case and written as a scenario.
 //!
-//! - [`case`]: a generated case and how it becomes a program, parameters and inputs;
+//! - [`case`]: a generated case and how it becomes parameters and inputs;
+//! - [`program`]: how a case becomes program text, per dialect and cycle;
 //! - [`strategy`]: proptest strategies, and the operator panel as a proptest-state-machine model;
 //! - [`oracle`]: running a case and checking the invariants;
 //! - [`regression`]: a failing case as a scenario file;
@@ -13,6 +14,7 @@
 
 pub mod case;
 pub mod oracle;
+pub mod program;
 pub mod properties;
 pub mod regression;
 pub mod strategy;
