@@ -31,7 +31,7 @@ use arbitrary::{Arbitrary, Unstructured};
 use nc_engine::invariants::time_ordered_ends;
 use nc_engine::{Machine, RunOptions};
 
-use crate::campaign::case::{Action, Compare, GenInput};
+use crate::campaign::case::{Compare, GenInput};
 use crate::campaign::{check_case, Case};
 use crate::render::{events::event_listing, timing::timing_diagram, vcd::write_vcd};
 use crate::scenario::{load, run, schema::ScenarioFile};
@@ -155,13 +155,12 @@ fn program_file_is_safe(text: &str) -> bool {
 /// The differential invariants (INV-06, INV-07) compare two runs that differ in one input, which
 /// only means something when the other inputs act the same in both (`docs/invariants.md`): like
 /// the campaign's `strategy::differential_case`, a case is compared only when its inputs are
-/// feed and spindle overrides; any other case keeps its inputs and the single-trace invariants
+/// feed overrides (`strategy::comparable`); any other case keeps its inputs and the single-trace invariants
 /// (found by fuzzing: a spindle stall and late zero-speed answers made a machine-lock comparison
 /// end 100 ms apart).
 pub fn engine_case(data: &[u8]) {
     let Ok(mut case) = Case::arbitrary_take_rest(Unstructured::new(data)) else { return };
-    let benign = |i: &GenInput| matches!(i.action, Action::FeedOverride(_) | Action::SpindleOverride(_));
-    if !case.inputs.iter().all(benign) {
+    if !case.inputs.iter().all(|i: &GenInput| crate::campaign::strategy::comparable(&i.action)) {
         case.compare = Compare::None;
     }
     let report = check_case(&case);

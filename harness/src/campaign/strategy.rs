@@ -115,6 +115,12 @@ pub fn input() -> impl Strategy<Value = GenInput> {
     (trigger(), action()).prop_map(|(trigger, action)| GenInput { trigger, action })
 }
 
+/// Whether an input leaves the two runs of a differential comparison comparable (the actions
+/// [`benign_action`] draws).
+pub fn comparable(a: &Action) -> bool {
+    matches!(a, Action::FeedOverride(_))
+}
+
 /// The actions that leave the two runs of a differential comparison comparable: nothing whose
 /// effect depends on when it lands. A feed hold or a cycle start at a fixed time is not: dry run
 /// shortens the G01 moves, so the same instant falls in another phase and a cycle start may come
