@@ -59,7 +59,21 @@ fn slow(s: &[u8]) -> Option<f64> {
 
 /// `v × 10^decimals` rounded to the nearest integer; `None` when out of `i64` or not finite.
 pub fn f64_to_fixed(v: f64, decimals: u32) -> Option<i64> {
-    let x = (v * POW10[decimals as usize]).round();
+    let y = v * POW10[decimals as usize];
+    if y.abs() < 4.5e15 {
+        // Below 2^52 the truncation and the fraction are exact: rounding half away from zero
+        // without a call to `round` (not inlined on baseline x86-64).
+        let i = y as i64;
+        let frac = y - i as f64;
+        return Some(if frac >= 0.5 {
+            i + 1
+        } else if frac <= -0.5 {
+            i - 1
+        } else {
+            i
+        });
+    }
+    let x = y.round();
     // 2^63 is exactly representable; anything at or past it does not fit.
     (x.is_finite() && x.abs() < 9.223_372_036_854_775e18).then_some(x as i64)
 }
@@ -127,10 +141,17 @@ pub fn parse_u64(s: &[u8]) -> Option<u64> {
     if let Some(h) = s.strip_prefix(b"0x").or_else(|| s.strip_prefix(b"0X")) {
         return u64::from_str_radix(std::str::from_utf8(h).ok()?, 16).ok();
     }
-    if s.is_empty() || !s.iter().all(u8::is_ascii_digit) {
+    if s.is_empty() {
         return None;
     }
-    std::str::from_utf8(s).ok()?.parse().ok()
+    let mut v: u64 = 0;
+    for &c in s {
+        if !c.is_ascii_digit() {
+            return None;
+        }
+        v = v.checked_mul(10)?.checked_add(u64::from(c - b'0'))?;
+    }
+    Some(v)
 }
 
 #[cfg(test)]
@@ -167,6 +188,23 @@ mod tests {
     #[case("inf", None)]
     fn floats(#[case] s: &str, #[case] want: Option<f64>) {
         assert_eq!(parse_f64(s.as_bytes()), want);
+    }
+
+    #[test]
+    fn fixed_rounds_half_away_from_zero() {
+        for v in [0.5, -0.5, 1.4999, -2.5, 2.5000001, 123.456_789_5, -0.000_000_4, 4.4e15, 5e15, -7e17] {
+            for d in [0, 3, 6] {
+                let x = (v * POW10[d as usize]).round();
+                let want = (x.abs() < 9.223_372_036_854_775e18).then_some(x as i64);
+                assert_eq!(f64_to_fixed(v, d), want, "{v} {d}");
+            }
+        }
+        assert_eq!(f64_to_fixed(f64::NAN, 0), None);
+        assert_eq!(f64_to_fixed(1e19, 0), None);
+        assert_eq!(parse_u64(b"18446744073709551615"), Some(u64::MAX));
+        assert_eq!(parse_u64(b"18446744073709551616"), None);
+        assert_eq!(parse_u64(b" 0x1F "), Some(31));
+        assert_eq!(parse_u64(b"+1"), None);
     }
 
     #[test]
