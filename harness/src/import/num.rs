@@ -16,38 +16,44 @@ pub fn parse_f64(s: &[u8]) -> Option<f64> {
         Some(b'+') => (false, &s[1..]),
         _ => (false, s),
     };
+    // Integer digits, then fractional digits; anything else goes to the standard library.
+    let n = digits.len();
     let mut mant: u64 = 0;
-    let mut n_digits = 0u32;
-    let mut frac = 0i32;
-    let mut seen_dot = false;
     let mut i = 0;
-    while i < digits.len() {
-        let c = digits[i];
-        if c.is_ascii_digit() {
-            if n_digits >= 19 {
-                return slow(s);
-            }
-            mant = mant * 10 + u64::from(c - b'0');
-            if mant != 0 {
-                n_digits += 1;
-            }
-            if seen_dot {
-                frac += 1;
-            }
-        } else if c == b'.' && !seen_dot {
-            seen_dot = true;
-        } else {
-            return slow(s);
+    while i < n {
+        let d = digits[i].wrapping_sub(b'0');
+        if d > 9 {
+            break;
         }
+        mant = mant.wrapping_mul(10).wrapping_add(u64::from(d));
         i += 1;
+    }
+    let int_digits = i;
+    let mut frac = 0usize;
+    if i < n && digits[i] == b'.' {
+        i += 1;
+        let start = i;
+        while i < n {
+            let d = digits[i].wrapping_sub(b'0');
+            if d > 9 {
+                break;
+            }
+            mant = mant.wrapping_mul(10).wrapping_add(u64::from(d));
+            i += 1;
+        }
+        frac = i - start;
+    }
+    if i != n {
+        return slow(s);
     }
     if digits.is_empty() || digits == b"." {
         return None;
     }
-    if mant >= 1 << 53 || frac as usize >= POW10.len() {
+    // At most 19 digits cannot overflow; below 2^53 and 10^22 the division is exactly rounded.
+    if int_digits + frac > 19 || mant >= 1 << 53 || frac >= POW10.len() {
         return slow(s);
     }
-    let v = mant as f64 / POW10[frac as usize];
+    let v = mant as f64 / POW10[frac];
     Some(if neg { -v } else { v })
 }
 
@@ -65,13 +71,7 @@ pub fn f64_to_fixed(v: f64, decimals: u32) -> Option<i64> {
         // without a call to `round` (not inlined on baseline x86-64).
         let i = y as i64;
         let frac = y - i as f64;
-        return Some(if frac >= 0.5 {
-            i + 1
-        } else if frac <= -0.5 {
-            i - 1
-        } else {
-            i
-        });
+        return Some(i + i64::from(frac >= 0.5) - i64::from(frac <= -0.5));
     }
     let x = y.round();
     // 2^63 is exactly representable; anything at or past it does not fit.
@@ -209,7 +209,16 @@ mod tests {
 
     #[test]
     fn fast_path_is_exact() {
-        for s in ["0.001328", "123.456789", "-0.000001", "3600.999"] {
+        for s in [
+            "0.001328",
+            "123.456789",
+            "-0.000001",
+            "3600.999",
+            "0000000000000000000001.5",
+            "9007199254740993",
+            ".5",
+            "7.",
+        ] {
             assert_eq!(parse_f64(s.as_bytes()), s.parse().ok());
         }
     }
