@@ -1,4 +1,4 @@
-//! Replays the fuzz seed corpora (`fuzz/corpus/<target>/`) and every stored crash input
+//! Replays the fuzz seed corpora (`fuzz/corpus/<target>/`, importer targets included) and every stored crash input
 //! (`fuzz/regressions/<target>/`) through the targets' logic in `nc_conform::fuzz`, on stable,
 //! so that a crash once found and fixed stays fixed. One test per target; a failure names every
 //! input that panicked, with its panic message.
@@ -59,4 +59,24 @@ fn scenario_yaml_corpus_and_regressions() {
 #[test]
 fn engine_case_corpus_and_regressions() {
     replay("engine_case", nc_conform::fuzz::engine_case);
+}
+
+#[test]
+fn import_csv_corpus_and_regressions() {
+    replay("import_csv", nc_conform::import::fuzz::import_csv);
+}
+
+#[test]
+fn import_jsonl_corpus_and_regressions() {
+    replay("import_jsonl", nc_conform::import::fuzz::import_jsonl);
+}
+
+#[test]
+fn import_vcd_corpus_and_regressions() {
+    replay("import_vcd", nc_conform::import::fuzz::import_vcd);
+}
+
+#[test]
+fn import_shdr_corpus_and_regressions() {
+    replay("import_shdr", nc_conform::import::fuzz::import_shdr);
 }

@@ -1,5 +1,5 @@
 //! The logic of the importer fuzz targets (`fuzz/fuzz_targets/import_*.rs`), kept in the library
-//! so that `cargo test` replays their corpora (`harness/tests/import_fuzz_corpus.rs`).
+//! so that `cargo test` replays their corpora (`harness/tests/fuzz_corpus.rs`).
 //!
 //! Each function imports the bytes in one format, strict and lenient: the importer never panics,
 //! every error has a message and (past the header) a line, renders as an `InputError` with its
