@@ -62,6 +62,16 @@ pub enum Command {
     /// Exits 0 when the trace conforms, 1 when it diverges (every divergence listed with rule
     /// id, time, expected, actual and margin), 2 for errors in the input.
     Check(crate::cli_check::CheckArgs),
+    /// Run every scenario against a controller behind an adapter program (docs/adapter-protocol.md)
+    /// and print a conformance summary per rule id.
+    ///
+    /// Exits 0 when every scenario run passed (skipped ones aside), 1 when one failed, 2 for errors
+    /// in the input (command line, scenario files, an adapter that cannot be started).
+    Conform(crate::cli_conform::ConformArgs),
+    /// Serve the reference engine over the adapter protocol on stdin/stdout (for adapters that
+    /// delegate to it, and for tests).
+    #[command(hide = true)]
+    Serve,
 }
 
 /// Arguments of `nc-conform run`.
@@ -108,6 +118,8 @@ pub fn main() -> ExitCode {
         Command::Run(args) => ExitCode::from(run(&args)),
         Command::Campaign(args) => ExitCode::from(crate::cli_campaign::run(&args)),
         Command::Check(args) => ExitCode::from(crate::cli_check::run(&args)),
+        Command::Conform(args) => ExitCode::from(crate::cli_conform::run(&args)),
+        Command::Serve => ExitCode::from(crate::cli_conform::serve()),
     }
 }
 

@@ -1,0 +1,422 @@
+//! A controller in another process (any language), over the line protocol of
+//! `docs/adapter-protocol.md`: one JSON object per line on its stdin, one answer per line on its
+//! stdout, its stderr kept (the tail goes into every error).
+//!
+//! Every request waits at most the timeout for its answer. A timeout, an exit, a line that is not
+//! a JSON object, or an answer that breaks the protocol is a [`ControllerError`] of that
+//! scenario; the process is then killed and started again (with a new handshake) for the next
+//! scenario, so one broken run does not end the suite.
+
+use std::collections::VecDeque;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use nc_engine::input::{Condition, Input};
+use nc_engine::trace::{Event, TraceEvent, TraceMeta};
+use nc_engine::units::Micros;
+use serde_json::value::RawValue;
+use serde_json::{json, Map, Value};
+
+use super::{wire, Advanced, Controller, ControllerError, ErrorKind, Identity, Job, Loaded, PROTOCOL};
+use crate::import::{self, Format};
+
+/// How much of the controller's stderr is kept (bytes).
+const STDERR_KEEP: usize = 4096;
+/// The longest answer line shown in an error (characters).
+const SHOW: usize = 200;
+
+/// A running adapter process.
+struct Proc {
+    child: Child,
+    stdin: ChildStdin,
+    lines: Receiver<std::io::Result<String>>,
+}
+
+/// A controller behind an adapter program.
+pub struct ProcessController {
+    argv: Vec<String>,
+    timeout: Duration,
+    proc: Option<Proc>,
+    stderr: Arc<Mutex<VecDeque<u8>>>,
+    identity: Option<Identity>,
+    meta: Option<TraceMeta>,
+    loaded: bool,
+}
+
+/// Splits a command line into words: blanks separate, `'...'` and `"..."` quote, `\` escapes
+/// the next character outside single quotes.
+///
+/// # Errors
+///
+/// An unclosed quote, or no word at all.
+pub fn split_command(line: &str) -> Result<Vec<String>, String> {
+    let mut words = Vec::new();
+    let mut cur = String::new();
+    let mut has = false;
+    let mut quote: Option<char> = None;
+    let mut chars = line.chars();
+    while let Some(c) = chars.next() {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (Some('\''), c) => cur.push(c),
+            (_, '\\') => {
+                if let Some(n) = chars.next() {
+                    cur.push(n);
+                }
+                has = true;
+            }
+            (Some(_), c) => cur.push(c),
+            (None, '\'' | '"') => {
+                quote = Some(c);
+                has = true;
+            }
+            (None, c) if c.is_whitespace() => {
+                if has || !cur.is_empty() {
+                    words.push(std::mem::take(&mut cur));
+                }
+                has = false;
+            }
+            (None, c) => cur.push(c),
+        }
+    }
+    if quote.is_some() {
+        return Err(format!("unclosed quote in `{line}`"));
+    }
+    if has || !cur.is_empty() {
+        words.push(cur);
+    }
+    if words.is_empty() {
+        return Err("an empty command".into());
+    }
+    Ok(words)
+}
+
+fn shorten(s: &str) -> String {
+    if s.chars().count() > SHOW {
+        format!("{}…", s.chars().take(SHOW).collect::<String>())
+    } else {
+        s.to_string()
+    }
+}
+
+impl ProcessController {
+    /// A controller run as `argv` (started at the first request), each answer awaited at most
+    /// `timeout`.
+    pub fn new(argv: Vec<String>, timeout: Duration) -> Self {
+        ProcessController {
+            argv,
+            timeout,
+            proc: None,
+            stderr: Arc::new(Mutex::new(VecDeque::new())),
+            identity: None,
+            meta: None,
+            loaded: false,
+        }
+    }
+
+    /// The last lines of the controller's stderr.
+    pub fn stderr_tail(&self) -> String {
+        let buf = self.stderr.lock().map(|b| b.iter().copied().collect::<Vec<u8>>()).unwrap_or_default();
+        String::from_utf8_lossy(&buf).into_owned()
+    }
+
+    fn fail(&mut self, kind: ErrorKind, message: impl Into<String>) -> ControllerError {
+        // Give the stderr reader a moment to collect what a dying process wrote.
+        if matches!(kind, ErrorKind::Crash | ErrorKind::Garbage | ErrorKind::Protocol) {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let e = ControllerError { kind, message: message.into(), stderr_tail: self.stderr_tail() };
+        if kind != ErrorKind::Failed {
+            self.stop();
+        }
+        e
+    }
+
+    /// Kills the process (it is started again at the next request).
+    fn stop(&mut self) {
+        if let Some(mut p) = self.proc.take() {
+            let _ = p.child.kill();
+            let _ = p.child.wait();
+        }
+        self.loaded = false;
+    }
+
+    fn start(&mut self) -> Result<(), ControllerError> {
+        if self.proc.is_some() {
+            return Ok(());
+        }
+        if let Ok(mut b) = self.stderr.lock() {
+            b.clear();
+        }
+        let mut child = Command::new(&self.argv[0])
+            .args(&self.argv[1..])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| {
+                ControllerError::new(ErrorKind::Crash, format!("cannot start `{}`: {e}", self.argv.join(" ")))
+            })?;
+        let stdin = child.stdin.take().expect("piped stdin");
+        let stdout = child.stdout.take().expect("piped stdout");
+        let mut stderr = child.stderr.take().expect("piped stderr");
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines() {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let keep = Arc::clone(&self.stderr);
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 1024];
+            while let Ok(n) = stderr.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                if let Ok(mut k) = keep.lock() {
+                    k.extend(&buf[..n]);
+                    while k.len() > STDERR_KEEP {
+                        k.pop_front();
+                    }
+                }
+            }
+        });
+        self.proc = Some(Proc { child, stdin, lines: rx });
+        self.hello()
+    }
+
+    fn hello(&mut self) -> Result<(), ControllerError> {
+        let msg = json!({
+            "op": "hello",
+            "protocol": PROTOCOL,
+            "trace_format": crate::import::jsonl::FORMAT,
+            "capabilities": ["stop_on"],
+        });
+        let o = self.send(&msg)?;
+        let theirs = o.get("protocol").and_then(Value::as_str).unwrap_or("(none)").to_string();
+        if theirs != PROTOCOL {
+            return Err(self.fail(
+                ErrorKind::Protocol,
+                format!("protocol version mismatch: the harness speaks {PROTOCOL}, the adapter {theirs}"),
+            ));
+        }
+        let text = |k: &str| o.get(k).and_then(Value::as_str).map(str::to_string);
+        let dialects: Option<Vec<String>> = o
+            .get("dialects")
+            .and_then(Value::as_array)
+            .map(|a| a.iter().filter_map(|d| d.as_str().map(str::to_string)).collect());
+        match (text("name"), text("version"), dialects) {
+            (Some(name), Some(version), Some(dialects)) => {
+                self.identity = Some(Identity { name, version, dialects });
+                Ok(())
+            }
+            _ => Err(self.fail(
+                ErrorKind::Protocol,
+                "the hello answer needs `name`, `version` (strings) and `dialects` (an array of strings)",
+            )),
+        }
+    }
+
+    /// Sends one message and returns the answer line (started if need be).
+    fn send_raw(&mut self, msg: &Value) -> Result<String, ControllerError> {
+        let op = msg.get("op").and_then(Value::as_str).unwrap_or("?").to_string();
+        let Some(p) = self.proc.as_mut() else {
+            return Err(ControllerError::new(ErrorKind::Crash, "the adapter is not running"));
+        };
+        let mut line = msg.to_string();
+        line.push('\n');
+        if let Err(e) = p.stdin.write_all(line.as_bytes()).and_then(|_| p.stdin.flush()) {
+            let status = p.child.wait().map(|s| s.to_string()).unwrap_or_else(|_| "unknown status".into());
+            return Err(
+                self.fail(ErrorKind::Crash, format!("the adapter exited ({status}) before `{op}`: {e}"))
+            );
+        }
+        match p.lines.recv_timeout(self.timeout) {
+            Ok(Ok(answer)) => Ok(answer),
+            Ok(Err(e)) => Err(self.fail(ErrorKind::Garbage, format!("unreadable answer to `{op}`: {e}"))),
+            Err(RecvTimeoutError::Timeout) => Err(self.fail(
+                ErrorKind::Timeout,
+                format!("no answer to `{op}` within {} ms", self.timeout.as_millis()),
+            )),
+            Err(RecvTimeoutError::Disconnected) => {
+                let status =
+                    p.child.wait().map(|s| s.to_string()).unwrap_or_else(|_| "unknown status".into());
+                Err(self.fail(
+                    ErrorKind::Crash,
+                    format!("the adapter exited ({status}) instead of answering `{op}`"),
+                ))
+            }
+        }
+    }
+
+    /// Sends one message; the answer must be a JSON object with `ok: true`.
+    fn send(&mut self, msg: &Value) -> Result<Map<String, Value>, ControllerError> {
+        let line = self.send_raw(msg)?;
+        let o = self.object(&line, msg)?;
+        self.ok(o, msg)
+    }
+
+    fn object(&mut self, line: &str, msg: &Value) -> Result<Map<String, Value>, ControllerError> {
+        let op = msg.get("op").and_then(Value::as_str).unwrap_or("?");
+        match serde_json::from_str::<Value>(line) {
+            Ok(Value::Object(o)) => Ok(o),
+            _ => Err(self.fail(
+                ErrorKind::Garbage,
+                format!("answer to `{op}` is not a JSON object: {}", shorten(line)),
+            )),
+        }
+    }
+
+    fn ok(&mut self, o: Map<String, Value>, msg: &Value) -> Result<Map<String, Value>, ControllerError> {
+        let op = msg.get("op").and_then(Value::as_str).unwrap_or("?");
+        match o.get("ok") {
+            Some(Value::Bool(true)) => Ok(o),
+            Some(Value::Bool(false)) => {
+                let why = o.get("error").and_then(Value::as_str).unwrap_or("(no `error` given)").to_string();
+                Err(self.fail(ErrorKind::Failed, format!("`{op}` failed: {why}")))
+            }
+            _ => Err(self.fail(ErrorKind::Protocol, format!("the answer to `{op}` has no `ok: true|false`"))),
+        }
+    }
+
+    fn ensure(&mut self) -> Result<(), ControllerError> {
+        if self.proc.is_none() {
+            self.start()?;
+        }
+        Ok(())
+    }
+
+    /// Events of a `read` answer, checked by the JSON Lines importer.
+    fn events(&mut self, line: &str) -> Result<Vec<TraceEvent>, ControllerError> {
+        #[derive(serde::Deserialize)]
+        struct ReadAnswer<'a> {
+            #[serde(borrow)]
+            events: Vec<&'a RawValue>,
+        }
+        let parsed: ReadAnswer = match serde_json::from_str(line) {
+            Ok(r) => r,
+            Err(e) => {
+                return Err(self
+                    .fail(ErrorKind::Protocol, format!("the `read` answer needs `events` (an array): {e}")))
+            }
+        };
+        let Some(meta) = &self.meta else {
+            return Err(self.fail(ErrorKind::Protocol, "`read` before a successful `load`"));
+        };
+        let mut text = wire::meta_line(meta);
+        for ev in &parsed.events {
+            text.push('\n');
+            text.push_str(ev.get());
+        }
+        text.push('\n');
+        let has_end = parsed.events.iter().any(|e| e.get().contains("\"end\""));
+        let opts = import::Options { format: Some(Format::Jsonl), ..Default::default() };
+        let mut out = Vec::with_capacity(parsed.events.len());
+        let name = "the `read` answer";
+        let reader = import::from_reader(name, Box::new(std::io::Cursor::new(text.into_bytes())), &opts);
+        let imp = match reader {
+            Ok(i) => i,
+            Err(e) => return Err(self.fail(ErrorKind::Protocol, format!("bad events: {}", e.message))),
+        };
+        for r in imp {
+            match r {
+                Ok(ev) => out.push(ev),
+                Err(e) if e.kind == import::ErrorKind::Truncated && !has_end => break,
+                Err(e) => {
+                    let exp = e.expected.as_ref().map_or(String::new(), |x| format!("; expected {x}"));
+                    // Line 1 is the meta line the harness adds: event k is line k + 1.
+                    let msg = format!("bad event {}: {}{exp}", e.line.saturating_sub(1), e.message);
+                    return Err(self.fail(ErrorKind::Protocol, msg));
+                }
+            }
+        }
+        if has_end && !out.last().is_some_and(|e| matches!(e.event, Event::End(_))) {
+            return Err(self.fail(ErrorKind::Protocol, "an event after the `end` event"));
+        }
+        Ok(out)
+    }
+}
+
+impl Drop for ProcessController {
+    fn drop(&mut self) {
+        if self.proc.is_some() {
+            let _ = self
+                .proc
+                .as_mut()
+                .map(|p| p.stdin.write_all(b"{\"op\":\"quit\"}\n").and_then(|_| p.stdin.flush()));
+            if let Some(p) = self.proc.as_mut() {
+                let _ = p.lines.recv_timeout(Duration::from_millis(200));
+            }
+            self.stop();
+        }
+    }
+}
+
+impl Controller for ProcessController {
+    fn identity(&mut self) -> Result<Identity, ControllerError> {
+        self.ensure()?;
+        self.identity.clone().ok_or_else(|| ControllerError::new(ErrorKind::Protocol, "no hello answer"))
+    }
+
+    fn load(&mut self, job: &Job) -> Result<Loaded, ControllerError> {
+        self.ensure()?;
+        if self.loaded {
+            self.send(&json!({ "op": "reset" }))?;
+            self.loaded = false;
+        }
+        self.meta = wire::meta_of(job);
+        let msg = wire::load_json(job);
+        let line = self.send_raw(&msg)?;
+        let o = self.object(&line, &msg)?;
+        if o.get("ok") == Some(&Value::Bool(false)) {
+            if let Some(r) = o.get("refused").and_then(Value::as_object) {
+                let line = r.get("line").and_then(Value::as_u64).unwrap_or(0) as u32;
+                let col = r.get("col").and_then(Value::as_u64).map(|c| c as u32);
+                let message = r.get("message").and_then(Value::as_str).unwrap_or("").to_string();
+                self.loaded = true;
+                return Ok(Loaded::Refused { line, col, message });
+            }
+            if let Some(why) = o.get("unsupported").and_then(Value::as_str) {
+                return Ok(Loaded::Unsupported(why.to_string()));
+            }
+        }
+        self.ok(o, &msg)?;
+        self.loaded = true;
+        Ok(Loaded::Ready)
+    }
+
+    fn input(&mut self, t_us: Micros, input: &Input) -> Result<(), ControllerError> {
+        self.send(&json!({ "op": "input", "t_us": t_us, "input": wire::input_json(input) })).map(|_| ())
+    }
+
+    fn advance(&mut self, until_us: Micros, stop_on: &[Condition]) -> Result<Advanced, ControllerError> {
+        let conds: Vec<Value> = stop_on.iter().map(wire::condition_json).collect();
+        let o = self.send(&json!({ "op": "advance", "until_us": until_us, "stop_on": conds }))?;
+        let now_us = o.get("now_us").and_then(Value::as_u64);
+        let ended = o.get("ended").and_then(Value::as_bool);
+        let stopped_on = match o.get("stopped_on") {
+            None | Some(Value::Null) => Ok(None),
+            Some(v) => v.as_u64().map(|k| Some(k as usize)).ok_or(()),
+        };
+        match (now_us, ended, stopped_on) {
+            (Some(now_us), Some(ended), Ok(stopped_on)) => Ok(Advanced { now_us, stopped_on, ended }),
+            _ => Err(self.fail(
+                ErrorKind::Protocol,
+                "the `advance` answer needs `now_us` (integer), `ended` (boolean), `stopped_on` (index or null)",
+            )),
+        }
+    }
+
+    fn read(&mut self) -> Result<Vec<TraceEvent>, ControllerError> {
+        let msg = json!({ "op": "read" });
+        let line = self.send_raw(&msg)?;
+        let o = self.object(&line, &msg)?;
+        self.ok(o, &msg)?;
+        self.events(&line)
+    }
+}

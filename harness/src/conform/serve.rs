@@ -1,0 +1,121 @@
+//! The adapter end of the line protocol (`docs/adapter-protocol.md`) for any [`Controller`]:
+//! `nc-conform serve` answers with the reference engine, so an adapter in another language can
+//! delegate to it, and the protocol is tested from both ends.
+
+use std::io::{BufRead, Write};
+
+use nc_engine::trace::TraceMeta;
+use serde_json::{json, Map, Value};
+
+use super::{wire, Controller, Loaded, PROTOCOL};
+
+/// Answers requests read from `input` on `output` until `quit` or the end of the input.
+///
+/// # Errors
+///
+/// Reading or writing failed.
+pub fn serve(ctl: &mut dyn Controller, input: impl BufRead, mut output: impl Write) -> std::io::Result<()> {
+    let mut meta: Option<TraceMeta> = None;
+    for line in input.lines() {
+        let line = line?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let (answer, quit) = match serde_json::from_str::<Value>(&line) {
+            Ok(Value::Object(o)) => {
+                let op = o.get("op").and_then(Value::as_str).unwrap_or("").to_string();
+                (answer(ctl, &op, &o, &mut meta), op == "quit")
+            }
+            _ => (failure("a request is one JSON object per line"), false),
+        };
+        output.write_all(answer.as_bytes())?;
+        output.write_all(b"\n")?;
+        output.flush()?;
+        if quit {
+            break;
+        }
+    }
+    Ok(())
+}
+
+fn failure(why: impl std::fmt::Display) -> String {
+    json!({ "ok": false, "error": why.to_string() }).to_string()
+}
+
+fn answer(
+    ctl: &mut dyn Controller,
+    op: &str,
+    o: &Map<String, Value>,
+    meta: &mut Option<TraceMeta>,
+) -> String {
+    match op {
+        "hello" => {
+            let theirs = o.get("protocol").and_then(Value::as_str).unwrap_or("");
+            if theirs != PROTOCOL {
+                return json!({ "ok": false, "protocol": PROTOCOL, "error": format!("protocol {theirs} is not spoken here; this adapter speaks {PROTOCOL}") }).to_string();
+            }
+            match ctl.identity() {
+                Ok(id) => json!({ "ok": true, "protocol": PROTOCOL, "name": id.name, "version": id.version, "dialects": id.dialects }).to_string(),
+                Err(e) => failure(e),
+            }
+        }
+        "load" => {
+            let job = match wire::job_from(o) {
+                Ok(j) => j,
+                Err(e) => return failure(format!("bad load: {e}")),
+            };
+            *meta = wire::meta_of(&job);
+            match ctl.load(&job) {
+                Ok(Loaded::Ready) => json!({ "ok": true }).to_string(),
+                Ok(Loaded::Refused { line, col, message }) => {
+                    json!({ "ok": false, "refused": { "line": line, "col": col, "message": message } })
+                        .to_string()
+                }
+                Ok(Loaded::Unsupported(why)) => json!({ "ok": false, "unsupported": why }).to_string(),
+                Err(e) => failure(e),
+            }
+        }
+        "input" => {
+            let t = o.get("t_us").and_then(Value::as_u64);
+            let input = o.get("input").map(wire::input_from);
+            match (t, input) {
+                (Some(t), Some(Ok(input))) => match ctl.input(t, &input) {
+                    Ok(()) => json!({ "ok": true }).to_string(),
+                    Err(e) => failure(e),
+                },
+                (_, Some(Err(e))) => failure(format!("bad input: {e}")),
+                _ => failure("an input request needs `t_us` (integer) and `input` (object)"),
+            }
+        }
+        "advance" => {
+            let Some(until) = o.get("until_us").and_then(Value::as_u64) else {
+                return failure("an advance request needs `until_us` (integer)");
+            };
+            let conds = o.get("stop_on").and_then(Value::as_array).map_or(&[][..], Vec::as_slice);
+            let stop_on: Result<Vec<_>, String> = conds.iter().map(wire::condition_from).collect();
+            match stop_on.map(|s| ctl.advance(until, &s)) {
+                Ok(Ok(a)) => {
+                    json!({ "ok": true, "now_us": a.now_us, "stopped_on": a.stopped_on, "ended": a.ended })
+                        .to_string()
+                }
+                Ok(Err(e)) => failure(e),
+                Err(e) => failure(format!("bad condition: {e}")),
+            }
+        }
+        "read" => match (ctl.read(), meta.as_ref()) {
+            (Ok(events), Some(m)) => {
+                format!("{{\"ok\":true,\"events\":[{}]}}", wire::event_lines(m, &events).join(","))
+            }
+            (Ok(_), None) => failure("no program loaded"),
+            (Err(e), _) => failure(e),
+        },
+        "reset" => {
+            *meta = None;
+            json!({ "ok": true }).to_string()
+        }
+        "quit" => json!({ "ok": true }).to_string(),
+        other => {
+            failure(format!("unknown op `{other}`; one of hello, load, input, advance, read, reset, quit"))
+        }
+    }
+}

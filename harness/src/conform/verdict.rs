@@ -1,0 +1,193 @@
+//! The verdict on one scenario run by a controller: the scenario's own expectations evaluated
+//! on the controller's trace, and the controller's trace compared with the reference's by
+//! [`crate::check`] (same tolerances as `nc-conform check`, the scenario's `.check.yaml` when it
+//! has one). Every failure names the rule id it breaks.
+
+use nc_engine::trace::Trace;
+use serde::Serialize;
+
+use super::drive::Driven;
+use super::ControllerError;
+use crate::check::{self, CheckSpec, Tolerances};
+use crate::scenario::expect;
+use crate::scenario::load::Scenario;
+use crate::scenario::timeline::ms;
+
+/// One thing the controller got wrong.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Failure {
+    /// The rule id it breaks.
+    pub rule: String,
+    /// Which test found it: `expect` (the scenario's expectations), `check` (the comparison with
+    /// the reference, `CHK-...`), `refusal`, or `controller` (the controller failed).
+    pub by: String,
+    /// What, when, expected and actual.
+    pub text: String,
+}
+
+/// How a scenario went.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// Every expectation held and the trace conforms to the reference.
+    Passed,
+    /// At least one failure.
+    Failed,
+    /// The controller does not run it (the reason).
+    Skipped(String),
+}
+
+/// The verdict on one scenario.
+#[derive(Debug, Clone, Serialize)]
+pub struct ScenarioVerdict {
+    /// The scenario file as named.
+    pub name: String,
+    /// Its title.
+    pub title: String,
+    /// The rule ids it cites.
+    pub rules: Vec<String>,
+    /// Passed, failed or skipped.
+    pub status: Status,
+    /// The failures.
+    pub failures: Vec<Failure>,
+    /// Comparisons left out because the reference fails them against itself.
+    pub notes: Vec<String>,
+}
+
+impl ScenarioVerdict {
+    /// Whether it failed.
+    pub fn failed(&self) -> bool {
+        self.status == Status::Failed
+    }
+
+    /// Whether a failure names a rule of this family (`GSK-RT` matches `GSK-RT-07`).
+    pub fn names_family(&self, family: &str) -> bool {
+        self.failures.iter().any(|f| f.rule.starts_with(family))
+    }
+
+    /// The failures, one per line.
+    pub fn failure_text(&self) -> String {
+        self.failures.iter().map(|f| format!("FAIL {} [{}] {}\n", f.rule, f.by, f.text)).collect()
+    }
+
+    /// The verdict when the controller failed.
+    pub fn controller_error(s: &Scenario, e: &ControllerError) -> ScenarioVerdict {
+        let failures = s
+            .rules
+            .iter()
+            .take(1)
+            .map(|r| Failure { rule: r.clone(), by: "controller".into(), text: e.to_string() })
+            .collect();
+        ScenarioVerdict {
+            name: s.name.clone(),
+            title: s.title.clone(),
+            rules: s.rules.clone(),
+            status: Status::Failed,
+            failures,
+            notes: Vec::new(),
+        }
+    }
+}
+
+/// Judges what the controller did with `s` against the reference's trace.
+pub fn judge(s: &Scenario, driven: &Driven, reference: &Trace, tolerances: &Tolerances) -> ScenarioVerdict {
+    let mut failures = Vec::new();
+    let mut notes = Vec::new();
+    let first_rule = s.rules.first().cloned().unwrap_or_default();
+    match (driven, &s.refusal) {
+        (Driven::Unsupported(why), _) => {
+            return ScenarioVerdict {
+                name: s.name.clone(),
+                title: s.title.clone(),
+                rules: s.rules.clone(),
+                status: Status::Skipped(why.clone()),
+                failures,
+                notes: Vec::new(),
+            }
+        }
+        (Driven::Refused { line, col, message }, Some((_, want, _))) => {
+            let ok = *line == want.line && want.col.is_none_or(|c| Some(c) == *col);
+            if !ok {
+                let at = col.map_or(String::new(), |c| format!(", column {c}"));
+                let want_at = want.col.map_or(String::new(), |c| format!(", column {c}"));
+                failures.push(Failure {
+                    rule: first_rule,
+                    by: "refusal".into(),
+                    text: format!(
+                        "refused at line {line}{at} ({message}); expected a refusal at line {}{want_at}",
+                        want.line
+                    ),
+                });
+            }
+        }
+        (Driven::Ran(_), Some((_, want, _))) => failures.push(Failure {
+            rule: first_rule,
+            by: "refusal".into(),
+            text: format!("the controller ran the program; expected a refusal at line {}", want.line),
+        }),
+        (Driven::Refused { line, col, message }, None) => failures.push(Failure {
+            rule: first_rule,
+            by: "refusal".into(),
+            text: format!(
+                "the controller refused a valid program at line {line}{}: {message}",
+                col.map_or(String::new(), |c| format!(", column {c}"))
+            ),
+        }),
+        (Driven::Ran(trace), None) => {
+            for v in expect::evaluate(&s.expect, trace).into_iter().filter(|v| !v.pass) {
+                let at = v.t_us.map_or(String::new(), |t| format!(" at {}", ms(t)));
+                failures.push(Failure {
+                    rule: v.rule.clone(),
+                    by: "expect".into(),
+                    text: format!("{}{at}: expected {}; actual {}", v.what, v.expected, v.actual),
+                });
+            }
+            let spec = CheckSpec {
+                tolerances: tolerances.clone(),
+                anchor: None,
+                expect: None,
+                rules: s.rules.clone(),
+            };
+            // A comparison the reference fails against itself (the absolute sync error of a
+            // stalled spindle, ...) says nothing about the controller: it is left out, noted.
+            let own = check::check(reference, reference.events.iter().cloned(), &spec);
+            let mut left_out: Vec<(String, String)> =
+                own.divergences.iter().map(|d| (d.rule.clone(), d.check.clone())).collect();
+            left_out.sort();
+            left_out.dedup();
+            for (rule, chk) in &left_out {
+                notes.push(format!("{chk} ({rule}) left out: the reference itself diverges from it"));
+            }
+            let rep = check::check(reference, trace.events.iter().cloned(), &spec);
+            let kept =
+                rep.sorted().into_iter().filter(|d| !left_out.contains(&(d.rule.clone(), d.check.clone())));
+            for d in kept {
+                let at = d.t_us.map_or(String::new(), |t| format!(" at {}", ms(t.max(0) as u64)));
+                failures.push(Failure {
+                    rule: d.rule.clone(),
+                    by: d.check.clone(),
+                    text: format!(
+                        "{}{at}: expected {}; actual {} (beyond by {})",
+                        d.what, d.expected, d.actual, d.margin
+                    ),
+                });
+            }
+            if rep.omitted > 0 {
+                failures.push(Failure {
+                    rule: first_rule,
+                    by: "check".into(),
+                    text: format!("{} more divergences not listed", rep.omitted),
+                });
+            }
+        }
+    }
+    let status = if failures.is_empty() { Status::Passed } else { Status::Failed };
+    ScenarioVerdict {
+        name: s.name.clone(),
+        title: s.title.clone(),
+        rules: s.rules.clone(),
+        status,
+        failures,
+        notes,
+    }
+}
