@@ -1,0 +1,443 @@
+//! Mutation proof of the conformance suite: deliberately defective controllers, each a mutant
+//! of the reference (it changes the parameters it obeys, the inputs it heeds, the program it
+//! reads or the trace it reports), must each be killed by the bundled scenarios, and the
+//! failure must name a rule of the expected family. A mutant that survives means a scenario is
+//! missing.
+//!
+//! To stay small for CI each mutant runs only on the scenario directories where its defect
+//! shows (listed with it), not on the whole library.
+
+use std::path::PathBuf;
+
+use nc_conform::conform::reference::Reference;
+use nc_conform::conform::suite::{run_one, scenario_files};
+use nc_conform::conform::{Advanced, Controller, ControllerError, Identity, Job, Loaded, ParamValue};
+use nc_engine::input::{Condition, CurrentSource, Input};
+use nc_engine::trace::{Event, Signal, TraceEvent};
+use nc_engine::units::Micros;
+
+/// A trace rewriter with its own state (one per run).
+type Rewrite = Box<dyn FnMut(TraceEvent) -> Option<TraceEvent>>;
+
+/// What is wrong with a mutant.
+#[derive(Clone, Copy)]
+enum Defect {
+    /// It runs with these parameter values whatever it is told (on this dialect).
+    Force(&'static str, &'static [(&'static str, Option<char>, f64)]),
+    /// It ignores the inputs this picks.
+    Deaf(fn(&Input) -> bool),
+    /// It reads the program differently.
+    Reads(fn(&str) -> String),
+    /// It reports its trace through this rewriter.
+    Reports(fn() -> Rewrite),
+    /// It runs programs the reference refuses, leaving out the refused lines.
+    Lenient,
+}
+
+/// A defective controller: the reference with one defect.
+struct Mutant {
+    inner: Reference,
+    defect: Defect,
+    rewrite: Option<Rewrite>,
+}
+
+impl Mutant {
+    fn new(defect: Defect) -> Self {
+        Mutant { inner: Reference::new(), defect, rewrite: None }
+    }
+}
+
+impl Controller for Mutant {
+    fn identity(&mut self) -> Result<Identity, ControllerError> {
+        self.inner.identity()
+    }
+
+    fn load(&mut self, job: &Job) -> Result<Loaded, ControllerError> {
+        let mut job = job.clone();
+        self.rewrite = None;
+        match self.defect {
+            Defect::Force(dialect, values) if job.dialect == dialect => {
+                for &(id, axis, value) in values {
+                    job.params.retain(|p| !(p.id == id && p.axis == axis));
+                    job.params.push(ParamValue { id: id.into(), axis, value });
+                }
+            }
+            Defect::Reads(f) => job.program = f(&job.program),
+            Defect::Reports(f) => self.rewrite = Some(f()),
+            Defect::Lenient => {
+                for _ in 0..8 {
+                    match self.inner.load(&job)? {
+                        Loaded::Refused { line, .. } => {
+                            let kept: Vec<&str> = job
+                                .program
+                                .lines()
+                                .enumerate()
+                                .map(|(i, l)| if i + 1 == line as usize { "" } else { l })
+                                .collect();
+                            job.program = kept.join("\n");
+                        }
+                        other => return Ok(other),
+                    }
+                }
+            }
+            _ => {}
+        }
+        self.inner.load(&job)
+    }
+
+    fn input(&mut self, t_us: Micros, input: &Input) -> Result<(), ControllerError> {
+        match self.defect {
+            Defect::Deaf(f) if f(input) => Ok(()),
+            _ => self.inner.input(t_us, input),
+        }
+    }
+
+    fn advance(&mut self, until_us: Micros, stop_on: &[Condition]) -> Result<Advanced, ControllerError> {
+        self.inner.advance(until_us, stop_on)
+    }
+
+    fn read(&mut self) -> Result<Vec<TraceEvent>, ControllerError> {
+        let events = self.inner.read()?;
+        Ok(match self.rewrite.as_mut() {
+            Some(f) => events.into_iter().filter_map(f).collect(),
+            None => events,
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Trace rewriters
+
+/// After a reset the spindle stays in position mode: RGSPP/RGSPM/SPPOS never fall again.
+fn reset_keeps_position_mode() -> Rewrite {
+    let mut reset = false;
+    let held = [Signal::Rgspp, Signal::Rgspm, Signal::Sppos];
+    Box::new(move |mut e| {
+        match &mut e.event {
+            Event::Input { name, .. } if name == "reset" => reset = true,
+            Event::Signal { signal, value: false } if reset && held.contains(signal) => return None,
+            Event::End(end) if reset => end.signals.set(Signal::Rgspp, true),
+            _ => {}
+        }
+        Some(e)
+    })
+}
+
+/// The tap axis (Z) runs 2 % long while cutting: a lead error.
+fn lead_error() -> Rewrite {
+    let mut cutting = false;
+    let mut start: Option<i64> = None;
+    Box::new(move |mut e| {
+        match &mut e.event {
+            Event::Phase(p) => {
+                cutting = p.name() == "cutting";
+                start = None;
+            }
+            Event::Sample(s) if cutting => {
+                let z0 = *start.get_or_insert(s.axes[2]);
+                s.axes[2] += (s.axes[2] - z0) / 50;
+            }
+            _ => {}
+        }
+        Some(e)
+    })
+}
+
+/// Alarms are not reported (the control stops without saying why).
+fn silent_alarms() -> Rewrite {
+    Box::new(|e| (!matches!(e.event, Event::Alarm(_))).then_some(e))
+}
+
+/// Samples are stamped one interpolation period late.
+fn late_samples() -> Rewrite {
+    Box::new(|mut e| {
+        if matches!(e.event, Event::Sample(_)) {
+            e.t_us += 1000;
+        }
+        Some(e)
+    })
+}
+
+/// The end summary leaves out the last modal group.
+fn short_modal_list() -> Rewrite {
+    Box::new(|mut e| {
+        if let Event::End(end) = &mut e.event {
+            end.modal.pop();
+        }
+        Some(e)
+    })
+}
+
+/// Phase changes are not reported.
+fn no_phases() -> Rewrite {
+    Box::new(|e| (!matches!(e.event, Event::Phase(_))).then_some(e))
+}
+
+/// Incremental words U and W read as the absolute X and Z.
+fn incremental_as_absolute(p: &str) -> String {
+    p.replace('U', "X").replace('W', "Z")
+}
+
+/// G98 and G99 swapped.
+fn swap_return_levels(p: &str) -> String {
+    p.replace("G98", "G9#").replace("G99", "G98").replace("G9#", "G99")
+}
+
+// ---------------------------------------------------------------------------------------------
+// The mutants
+
+struct Case {
+    name: &'static str,
+    defect: Defect,
+    /// Scenario paths (under scenarios/) containing one of these are run.
+    scenarios: &'static [&'static str],
+    /// The failure must name a rule of one of these families.
+    families: &'static [&'static str],
+}
+
+const MAX: f64 = 100_000.0;
+
+fn cases() -> Vec<Case> {
+    vec![
+        Case {
+            name: "feed hold honoured mid-tap (Fanuc FHD forced)",
+            defect: Defect::Force("fanuc-mill", &[("5200.6", None, 1.0)]),
+            scenarios: &["fanuc/feed_hold/"],
+            families: &["FAN-RT"],
+        },
+        Case {
+            name: "feed hold ignored",
+            defect: Defect::Deaf(|i| *i == Input::FeedHold),
+            scenarios: &["gsk/feed_hold/"],
+            families: &["GSK-RT", "COM-INP"],
+        },
+        Case {
+            name: "dry run ignored",
+            defect: Defect::Deaf(|i| matches!(i, Input::DryRun(_))),
+            scenarios: &["gsk/dry_run/"],
+            families: &["GSK-RT", "COM-INP"],
+        },
+        Case {
+            name: "machine lock ignored",
+            defect: Defect::Deaf(|i| matches!(i, Input::MachineLock(_))),
+            scenarios: &["gsk/machine_lock/"],
+            families: &["GSK-RT", "COM-INP"],
+        },
+        Case {
+            name: "no overload retract",
+            defect: Defect::Deaf(|i| {
+                matches!(i, Input::MotorCurrent { source: CurrentSource::FeedAxis, .. })
+            }),
+            scenarios: &["gsk/overload/"],
+            families: &["GSK-RT"],
+        },
+        Case {
+            name: "reset leaves the spindle in position mode",
+            defect: Defect::Reports(reset_keeps_position_mode),
+            scenarios: &["gsk/reset/"],
+            families: &["GSK-RT", "COM-INP"],
+        },
+        Case {
+            name: "RGTAP not awaited after cancel (RTCRG forced 1)",
+            defect: Defect::Force("gsk-lathe", &[("186.2", None, 1.0)]),
+            scenarios: &["gsk/cancel/"],
+            families: &["GSK-RT"],
+        },
+        Case {
+            name: "wrong peck retract (5213 forced 3 mm)",
+            defect: Defect::Force("fanuc-mill", &[("5213", None, 3.0)]),
+            scenarios: &["fanuc/rigid/peck"],
+            families: &["FAN-RT", "FAN-CYC"],
+        },
+        Case {
+            name: "clamp M code missing (170 forced 0)",
+            defect: Defect::Force("gsk-lathe", &[("170", None, 0.0)]),
+            scenarios: &["gsk/clamp/"],
+            families: &["GSK-RT"],
+        },
+        Case {
+            name: "G98/G99 return level swapped",
+            defect: Defect::Reads(swap_return_levels),
+            scenarios: &["fanuc/return_level/", "fanuc/initial_level/"],
+            families: &["FAN-CYC", "FAN-RT"],
+        },
+        Case {
+            name: "KND reversal before the spindle stops (no zero-speed wait)",
+            defect: Defect::Force(
+                "knd-lathe",
+                &[("plc.zsp_ms", None, 0.0), ("nc.spindle_brake_ms", None, 0.0)],
+            ),
+            scenarios: &["knd/g93/standard", "knd/g93/never_retracts_zero_speed"],
+            families: &["KND-G93"],
+        },
+        Case {
+            name: "KND reversal without backlash take-up (RVDL forced 0)",
+            defect: Defect::Force("knd-lathe", &[("003.RVDL", None, 0.0)]),
+            scenarios: &["knd/g93/never_retracts_backlash"],
+            families: &["KND-G93"],
+        },
+        Case {
+            name: "no M29 answer timer (alarm 5002 never)",
+            defect: Defect::Force("gsk-lathe", &[("plc.m29_timeout_ms", None, MAX)]),
+            scenarios: &["gsk/m29/", "common/plc/"],
+            families: &["GSK-RT", "COM-PLC"],
+        },
+        Case {
+            name: "no FIN timer (NC-1020 never)",
+            defect: Defect::Force("gsk-lathe", &[("plc.fin_timeout_ms", None, MAX)]),
+            scenarios: &["common/plc/fin_never"],
+            families: &["COM-PLC"],
+        },
+        Case {
+            name: "no spindle stall timer (5074 never)",
+            defect: Defect::Force("gsk-lathe", &[("plc.spindle_stall_ms", None, MAX)]),
+            scenarios: &["common/inp/spindle_slow_stall"],
+            families: &["COM-INP", "COM-PLC", "GSK-RT"],
+        },
+        Case {
+            name: "emergency stop ignored",
+            defect: Defect::Deaf(|i| matches!(i, Input::EmergencyStop(_))),
+            scenarios: &["common/inp/"],
+            families: &["COM-INP"],
+        },
+        Case {
+            name: "single block ignored",
+            defect: Defect::Deaf(|i| matches!(i, Input::SingleBlock(_))),
+            scenarios: &["gsk/single_block/"],
+            families: &["GSK-RT", "COM-INP"],
+        },
+        Case {
+            name: "backlash not compensated (34.Z forced 0)",
+            defect: Defect::Force("gsk-lathe", &[("34", Some('Z'), 0.0)]),
+            scenarios: &["gsk/backlash/"],
+            families: &["COM-MOT", "GSK-RT"],
+        },
+        Case {
+            name: "lead error of 2 % in the cut",
+            defect: Defect::Reports(lead_error),
+            scenarios: &["common/sync/"],
+            families: &["COM-SYNC"],
+        },
+        Case {
+            name: "alarms not reported",
+            defect: Defect::Reports(silent_alarms),
+            scenarios: &["fanuc/alarms/02"],
+            families: &["FAN-RT"],
+        },
+        Case {
+            name: "samples stamped a period late",
+            defect: Defect::Reports(late_samples),
+            scenarios: &["common/time/sample_shows"],
+            families: &["COM-TIME"],
+        },
+        Case {
+            name: "orientation before tapping skipped (RTORI forced 0)",
+            defect: Defect::Force("gsk-lathe", &[("186.7", None, 0.0)]),
+            scenarios: &["gsk/orientation/"],
+            families: &["GSK-RT"],
+        },
+        Case {
+            name: "G84 rigid without M29 not supported (5200.0 forced 0)",
+            defect: Defect::Force("fanuc-mill", &[("5200.0", None, 0.0)]),
+            scenarios: &["fanuc/rigid/param_5200_0"],
+            families: &["FAN-RT"],
+        },
+        Case {
+            name: "extraction override ignored (5211 forced 100)",
+            defect: Defect::Force("fanuc-mill", &[("5211", None, 100.0)]),
+            scenarios: &["fanuc/rigid/extraction_override"],
+            families: &["FAN-RT"],
+        },
+        Case {
+            name: "lenient parser (runs what it should refuse)",
+            defect: Defect::Lenient,
+            scenarios: &["common/parse/"],
+            families: &["COM-PARSE"],
+        },
+        Case {
+            name: "GSK words without decimal point read in increments (nc.dpi forced 0)",
+            defect: Defect::Force("gsk-lathe", &[("nc.dpi", None, 0.0)]),
+            scenarios: &["gsk/lex/"],
+            families: &["GSK-LEX"],
+        },
+        Case {
+            name: "Fanuc words without decimal point read in increments (3401.0 forced 0)",
+            defect: Defect::Force("fanuc-mill", &[("3401.0", None, 0.0)]),
+            scenarios: &["fanuc/words/"],
+            families: &["FAN-LEX"],
+        },
+        Case {
+            name: "KND U/W read as absolute X/Z",
+            defect: Defect::Reads(incremental_as_absolute),
+            scenarios: &["knd/lex/"],
+            families: &["KND-LEX"],
+        },
+        Case {
+            name: "end summary without the last modal group",
+            defect: Defect::Reports(short_modal_list),
+            scenarios: &["fanuc/modal/"],
+            families: &["FAN-MOD"],
+        },
+        Case {
+            name: "phase changes not reported",
+            defect: Defect::Reports(no_phases),
+            scenarios: &["common/trace/"],
+            families: &["COM-TRACE"],
+        },
+    ]
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+#[test]
+fn every_mutant_is_killed_and_the_rule_named() {
+    let files = scenario_files(&root().join("scenarios"));
+    let dialects = Reference::new().identity().unwrap().dialects;
+    let cases = cases();
+    let mut survivors = Vec::new();
+    let mut killed = 0;
+    for case in &cases {
+        let mut kills = Vec::new();
+        let mut runs = 0;
+        for p in &files {
+            let name = p.strip_prefix(root()).unwrap().display().to_string().replace('\\', "/");
+            if !case.scenarios.iter().any(|s| name.contains(s)) {
+                continue;
+            }
+            runs += 1;
+            let mut ctl = Mutant::new(case.defect);
+            let v = run_one(&mut ctl, &dialects, p, &name).unwrap();
+            if v.failed() {
+                let rules: Vec<&str> = v.failures.iter().map(|f| f.rule.as_str()).collect();
+                kills.push((name, rules.join(" "), case.families.iter().any(|f| v.names_family(f))));
+            }
+        }
+        assert!(runs > 0, "{}: no scenario matches {:?}", case.name, case.scenarios);
+        if let Some(k) = kills.iter().find(|k| k.2) {
+            killed += 1;
+            eprintln!("killed  {} by {} ({})", case.name, k.0, k.1);
+        } else {
+            survivors.push(format!("{} survived {runs} scenarios (failures: {kills:?})", case.name));
+        }
+    }
+    eprintln!("kill rate: {killed}/{}", cases.len());
+    assert!(cases.len() >= 20);
+    assert!(survivors.is_empty(), "{}", survivors.join("\n"));
+}
+
+#[test]
+fn the_unmutated_reference_passes_the_mutant_scenarios() {
+    // The control group: the kills above are the defects', not the harness'.
+    let files = scenario_files(&root().join("scenarios"));
+    let dialects = Reference::new().identity().unwrap().dialects;
+    let wanted: Vec<&str> = cases().iter().flat_map(|c| c.scenarios.iter().copied()).collect();
+    for p in &files {
+        let name = p.strip_prefix(root()).unwrap().display().to_string().replace('\\', "/");
+        if wanted.iter().any(|s| name.contains(s)) {
+            let v = run_one(&mut Reference::new(), &dialects, p, &name).unwrap();
+            assert!(!v.failed(), "{name}: {}", v.failure_text());
+        }
+    }
+}
