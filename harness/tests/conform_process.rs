@@ -1,0 +1,169 @@
+//! `nc-conform conform` against adapter processes: the Python example adapter (examples/), the
+//! reference behind `nc-conform serve`, and broken adapters (a crash, a hang, garbage output, a
+//! wrong protocol version), each of which must fail its scenario with the controller's stderr
+//! while the suite goes on with the next scenario.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_nc-conform")
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn conform(adapter: &str, extra: &[&str]) -> Output {
+    Command::new(bin())
+        .current_dir(root())
+        .args(["conform", "--adapter", adapter])
+        .args(extra)
+        .output()
+        .expect("nc-conform runs")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// A temporary directory of this test run.
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("nc-conform-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A Python adapter that proxies to `nc-conform serve` but misbehaves as `mode` says.
+fn broken_adapter(dir: &Path, mode: &str) -> String {
+    let script = r#"
+import json, subprocess, sys, os, time
+mode, marker, nc = sys.argv[1], sys.argv[2], sys.argv[3]
+serve = subprocess.Popen([nc, "serve"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+first = not os.path.exists(marker)
+for line in sys.stdin:
+    req = json.loads(line)
+    op = req["op"]
+    if op == "hello" and mode == "old":
+        print(json.dumps({"ok": True, "protocol": "nc-conform-adapter/0", "name": "old", "version": "0", "dialects": []}), flush=True)
+        continue
+    if op == "load" and first:
+        open(marker, "w").close()
+        if mode == "crash":
+            sys.stderr.write("boom: the toy controller lost its axis card\n"); sys.stderr.flush()
+            os._exit(3)
+    if op == "advance" and first and mode == "hang":
+        sys.stderr.write("stuck waiting for the servo\n"); sys.stderr.flush()
+        time.sleep(30)
+    if op == "read" and first and mode == "garbage":
+        sys.stderr.write("debug print went to stdout\n"); sys.stderr.flush()
+        print("axis Z at -12.5", flush=True)
+        continue
+    serve.stdin.write(line); serve.stdin.flush()
+    sys.stdout.write(serve.stdout.readline()); sys.stdout.flush()
+"#;
+    let path = dir.join("adapter.py");
+    std::fs::write(&path, script).unwrap();
+    format!("python3 {} {mode} {} {}", path.display(), dir.join("marker").display(), bin())
+}
+
+const TWO: [&str; 4] = ["--filter", "gsk/feed_hold/during_cutting", "--filter", "gsk/feed_hold/during_dwell"];
+
+#[test]
+fn the_python_example_adapter_passes_and_skips_the_dialects_it_does_not_run() {
+    let dir = scratch("python");
+    let junit = dir.join("junit.xml");
+    let report = dir.join("report.json");
+    let adapter =
+        format!("python3 examples/python-adapter/toy_adapter.py --nc-conform {} --dialects gsk-lathe", bin());
+    let o = conform(
+        &adapter,
+        &[
+            "--filter",
+            "gsk/feed_hold/",
+            "--filter",
+            "fanuc/feed_hold/rigid",
+            "--junit",
+            junit.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("toy-python 0.1"), "{t}");
+    assert!(t.contains("ok   scenarios/gsk/feed_hold/during_cutting.yaml"), "{t}");
+    assert!(t.contains("skip scenarios/fanuc/feed_hold/"), "{t}");
+    assert!(t.contains("GSK-RT-27"), "the summary per rule id: {t}");
+    assert!(t.contains("0 failed"), "{t}");
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    assert!(xml.contains("<skipped message=\"the controller does not run dialect fanuc-mill\"/>"), "{xml}");
+    assert!(xml.contains("name=\"scenarios/gsk/feed_hold/during_cutting.yaml\"/>"), "{xml}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(json["failed"], 0);
+    assert!(json["rules"]["GSK-RT-27"]["passed"].as_array().unwrap().len() >= 1);
+}
+
+#[test]
+fn a_crash_fails_its_scenario_with_the_stderr_and_the_suite_goes_on() {
+    let dir = scratch("crash");
+    let o = conform(&broken_adapter(&dir, "crash"), &TWO);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("FAIL scenarios/gsk/feed_hold/during_cutting.yaml"), "{t}");
+    assert!(t.contains("crash: the adapter exited (exit status: 3)"), "{t}");
+    assert!(t.contains("boom: the toy controller lost its axis card"), "stderr tail: {t}");
+    assert!(t.contains("ok   scenarios/gsk/feed_hold/during_dwell.yaml"), "restarted for the next: {t}");
+}
+
+#[test]
+fn a_hang_times_out_and_the_suite_goes_on() {
+    let dir = scratch("hang");
+    let mut args = TWO.to_vec();
+    args.extend(["--timeout-ms", "1000"]);
+    let o = conform(&broken_adapter(&dir, "hang"), &args);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("timeout: no answer to `advance` within 1000 ms"), "{t}");
+    assert!(t.contains("stuck waiting for the servo"), "{t}");
+    assert!(t.contains("ok   scenarios/gsk/feed_hold/during_dwell.yaml"), "{t}");
+}
+
+#[test]
+fn garbage_output_fails_its_scenario_and_the_suite_goes_on() {
+    let dir = scratch("garbage");
+    let o = conform(&broken_adapter(&dir, "garbage"), &TWO);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("garbage output: answer to `read` is not a JSON object: axis Z at -12.5"), "{t}");
+    assert!(t.contains("debug print went to stdout"), "{t}");
+    assert!(t.contains("ok   scenarios/gsk/feed_hold/during_dwell.yaml"), "{t}");
+}
+
+#[test]
+fn a_protocol_version_mismatch_is_a_clear_input_error() {
+    let dir = scratch("old");
+    let o = conform(&broken_adapter(&dir, "old"), &TWO);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert!(
+        t.contains("protocol version mismatch: the harness speaks nc-conform-adapter/1, the adapter nc-conform-adapter/0"),
+        "{t}"
+    );
+}
+
+#[test]
+fn input_errors_exit_2() {
+    let o = conform("", &[]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let o = conform(&format!("{} serve", bin()), &["--scenarios", "no/such/dir"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).contains("not a directory of scenarios"));
+    let o = conform(&format!("{} serve", bin()), &["--filter", "no-scenario-has-this"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).contains("no scenario file matches"));
+    let o = conform("/no/such/adapter-program", &TWO);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).contains("cannot start `/no/such/adapter-program`"), "{}", text(&o));
+}
