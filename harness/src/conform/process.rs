@@ -420,3 +420,19 @@ impl Controller for ProcessController {
         self.events(&line)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::split_command;
+
+    #[test]
+    fn command_lines_split_like_a_shell() {
+        assert_eq!(split_command("python3 a.py --port 3").unwrap(), ["python3", "a.py", "--port", "3"]);
+        assert_eq!(
+            split_command(r#"  "my adapter" 'x y' a\ b "" "#).unwrap(),
+            ["my adapter", "x y", "a b", ""]
+        );
+        assert_eq!(split_command("it's").unwrap_err(), "unclosed quote in `it's`");
+        assert_eq!(split_command("   ").unwrap_err(), "an empty command");
+    }
+}

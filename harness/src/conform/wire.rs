@@ -274,3 +274,85 @@ pub fn meta_line(meta: &TraceMeta) -> String {
     let bytes = w.finish().unwrap_or_default();
     String::from_utf8_lossy(&bytes).trim_end().to_string()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nc_engine::trace::Phase;
+
+    #[test]
+    fn every_input_survives_the_wire() {
+        let inputs = [
+            Input::CycleStart,
+            Input::Reset,
+            Input::FeedHold,
+            Input::SingleBlock(true),
+            Input::DryRun(false),
+            Input::MachineLock(true),
+            Input::OptionalStop(true),
+            Input::EmergencyStop(true),
+            Input::SpindleStall(false),
+            Input::FeedOverride(120),
+            Input::SpindleOverride(50),
+            Input::MotorCurrent { source: CurrentSource::Spindle, percent: 150 },
+            Input::PlcAnswer { answer: PlcAnswer::Fin, extra_us: Some(5000) },
+            Input::PlcAnswer { answer: PlcAnswer::Rgtap, extra_us: None },
+            Input::SetParam { id: "34".into(), axis: Some('Z'), value: 0.05 },
+            Input::SetParam { id: "271".into(), axis: None, value: 120.0 },
+        ];
+        for i in inputs {
+            let v = input_json(&i);
+            assert_eq!(v["name"], i.name());
+            assert_eq!(input_from(&serde_json::from_str(&v.to_string()).unwrap()), Ok(i));
+        }
+    }
+
+    #[test]
+    fn every_condition_survives_the_wire() {
+        let conds = [
+            Condition::Signal { signal: Signal::Rgtap, value: true },
+            Condition::AxisBelow { axis: 2, nm: -10_500_000 },
+            Condition::AxisAbove { axis: 0, nm: 1 },
+            Condition::Block { line: 7 },
+            Condition::Phase(Phase::Cutting),
+            Condition::Function { letter: 'M', code: 29 },
+        ];
+        for c in conds {
+            let text = condition_json(&c).to_string();
+            assert_eq!(condition_from(&serde_json::from_str(&text).unwrap()), Ok(c), "{text}");
+        }
+        assert_eq!(
+            condition_json(&Condition::AxisBelow { axis: 2, nm: -10_500_000 }).to_string(),
+            r#"{"axis":"Z","below":-10.5}"#
+        );
+    }
+
+    #[test]
+    fn bad_values_say_what_was_expected() {
+        let bad = |s: &str| input_from(&serde_json::from_str(s).unwrap()).unwrap_err();
+        assert_eq!(bad(r#"{"name":"jog"}"#), "unknown input `jog`");
+        assert_eq!(bad(r#"{"name":"dry_run"}"#), "`on` must be true or false");
+        assert_eq!(
+            bad(r#"{"name":"set_param","id":"34","axis":"Q","value":1}"#),
+            "`Q` is not an axis letter (X Y Z A B C)"
+        );
+        let c = |s: &str| condition_from(&serde_json::from_str(s).unwrap()).unwrap_err();
+        assert_eq!(c(r#"{"function":"G84"}"#), "`G84` is not an M, S or T function");
+        assert_eq!(c(r#"{"axis":"Z"}"#), "an axis condition has exactly one of `below` and `above`");
+        assert_eq!(c(r#"{"signal":"NOPE","value":1}"#), "unknown signal `NOPE`");
+    }
+
+    #[test]
+    fn a_job_survives_the_wire() {
+        let job = Job {
+            dialect: "gsk-lathe".into(),
+            program: "G98;\nM29 S500;\n".into(),
+            params: vec![ParamValue { id: "34".into(), axis: Some('Z'), value: 0.05 }],
+            sample_us: 1000,
+            time_limit_us: 60_000_000,
+            auto_cycle_start: false,
+        };
+        let v: Value = serde_json::from_str(&load_json(&job).to_string()).unwrap();
+        assert_eq!(job_from(v.as_object().unwrap()), Ok(job));
+    }
+}
