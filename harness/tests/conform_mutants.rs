@@ -355,6 +355,12 @@ fn cases() -> Vec<Case> {
             families: &["COM-PARSE"],
         },
         Case {
+            name: "lenient KND parser",
+            defect: Defect::Lenient,
+            scenarios: &["common/parse/macro_variable_refused_knd"],
+            families: &["COM-PARSE"],
+        },
+        Case {
             name: "GSK words without decimal point read in increments (nc.dpi forced 0)",
             defect: Defect::Force("gsk-lathe", &[("nc.dpi", None, 0.0)]),
             scenarios: &["gsk/lex/"],
