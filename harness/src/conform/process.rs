@@ -197,7 +197,9 @@ impl ProcessController {
             "trace_format": crate::import::jsonl::FORMAT,
             "capabilities": ["stop_on"],
         });
-        let o = self.send(&msg)?;
+        let line = self.send_raw(&msg)?;
+        let o = self.object(&line, &msg)?;
+        // The version first: an adapter of another version may refuse the hello with ok: false.
         let theirs = o.get("protocol").and_then(Value::as_str).unwrap_or("(none)").to_string();
         if theirs != PROTOCOL {
             return Err(self.fail(
@@ -205,6 +207,7 @@ impl ProcessController {
                 format!("protocol version mismatch: the harness speaks {PROTOCOL}, the adapter {theirs}"),
             ));
         }
+        let o = self.ok(o, &msg)?;
         let text = |k: &str| o.get(k).and_then(Value::as_str).map(str::to_string);
         let dialects: Option<Vec<String>> = o
             .get("dialects")

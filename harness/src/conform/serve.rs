@@ -119,3 +119,61 @@ fn answer(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::conform::reference::Reference;
+
+    fn talk(requests: &[&str]) -> Vec<Value> {
+        let input = requests.join("\n");
+        let mut out = Vec::new();
+        serve(&mut Reference::new(), input.as_bytes(), &mut out).unwrap();
+        String::from_utf8(out).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect()
+    }
+
+    #[test]
+    fn a_session_answers_every_request_in_order() {
+        let a = talk(&[
+            r#"{"op":"hello","protocol":"nc-conform-adapter/1"}"#,
+            r#"{"op":"load","dialect":"gsk-lathe","program":"G0 Z-5;\nM30;\n","params":[],"sample_us":0,"time_limit_us":10000000,"auto_cycle_start":true}"#,
+            r#"{"op":"advance","until_us":10000001,"stop_on":[{"function":"M30"}]}"#,
+            r#"{"op":"read"}"#,
+            r#"{"op":"advance","until_us":10000001,"stop_on":[]}"#,
+            r#"{"op":"jog"}"#,
+            "not json",
+            r#"{"op":"quit"}"#,
+            r#"{"op":"read"}"#,
+        ]);
+        assert_eq!(a.len(), 8, "nothing is answered after quit: {a:?}");
+        assert_eq!(a[0]["name"], "nc-conform reference");
+        assert_eq!(a[1], json!({ "ok": true }));
+        assert_eq!(a[2]["stopped_on"], 0);
+        assert_eq!(a[2]["ended"], false);
+        let events = a[3]["events"].as_array().unwrap();
+        // The stop comes where the engine acts on M30's output: after it, at the same µs.
+        let m30 = events.iter().find(|e| e["kind"] == "function" && e["code"] == 30).expect("M30 read");
+        assert_eq!(events.last().unwrap()["t_us"], m30["t_us"]);
+        assert!(!events.iter().any(|e| e["kind"] == "end"));
+        assert_eq!(a[4]["ended"], true);
+        assert!(a[5]["error"].as_str().unwrap().starts_with("unknown op `jog`"));
+        assert_eq!(a[6]["error"], "a request is one JSON object per line");
+        assert_eq!(a[7], json!({ "ok": true }));
+    }
+
+    #[test]
+    fn another_protocol_version_is_refused_with_ours() {
+        let a = talk(&[r#"{"op":"hello","protocol":"nc-conform-adapter/2"}"#]);
+        assert_eq!(a[0]["ok"], false);
+        assert_eq!(a[0]["protocol"], PROTOCOL);
+    }
+
+    #[test]
+    fn a_refused_program_gives_line_and_column() {
+        let a = talk(&[
+            r#"{"op":"load","dialect":"gsk-lathe","program":"G98;\nG0 X#1;\n","params":[],"sample_us":1000,"time_limit_us":1000000,"auto_cycle_start":true}"#,
+        ]);
+        assert_eq!(a[0]["refused"]["line"], 2);
+        assert_eq!(a[0]["refused"]["col"], 5);
+    }
+}
