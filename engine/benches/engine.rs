@@ -85,7 +85,21 @@ fn benches(c: &mut Criterion) {
         b.iter_batched(|| (), |_| run_once(&fm, &fprog, &fopts), BatchSize::SmallInput)
     });
     g.finish();
+
+    // gsk-lathe G92.3 (seed 002): five variable-lead passes locked to the spindle, then a taper.
+    let gm = Machine::new("gsk-lathe").unwrap();
+    let gprog = gm.parse(GSK_G923).unwrap();
+    let probe = run_once(&gm, &gprog, &opts);
+    eprintln!("gsk g92.3: {} µs simulated, {} events, {} samples", probe.last_t, probe.events, probe.samples);
+    let mut g = c.benchmark_group("realtime_factor");
+    g.throughput(Throughput::Elements(probe.last_t));
+    g.bench_function("gsk_g92_3_1ms_samples", |b| b.iter(|| run_once(&gm, &gprog, &opts)));
+    g.finish();
 }
+
+/// A GSK G92.3 program (examples/gsk_g92_3.nc): seed 002's words, then a taper pass set.
+const GSK_G923: &str = "G98;\nG0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\n\
+G92.3 X36 Z-10 R-1 F3 D-0.05 E0.5 Q0.5 A1;\nG0 X60;\nM05;\nM30;\n";
 
 criterion_group!(engine, benches);
 criterion_main!(engine);

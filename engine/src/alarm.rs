@@ -74,11 +74,24 @@ pub enum AlarmKind {
     /// NC-1051: `knd-lathe` G93: the drive did not report zero speed (ZSP) within the timer after
     /// the spindle was braked or stopped: the cycle cannot reverse ("the tap never retracts").
     ZeroSpeedNotReported,
+    /// NC-1060: `gsk-lathe` G92.3: the lead (F or I, or the lead reached through D) is out of
+    /// range, zero or negative.
+    ThreadLeadOutOfRange,
+    /// NC-1061: `gsk-lathe` G92.3: the tool width A is above the smallest lead of the thread.
+    ToolWidthAboveLead,
+    /// NC-1062: `gsk-lathe` G92.3: the tip width E (or E + A) is above the smallest lead.
+    TipWidthAboveLead,
+    /// NC-1063: `gsk-lathe` G92.3: the axial step Q is 0 (or was never given).
+    ThreadStepZero,
+    /// NC-1064: `gsk-lathe` G92.3: the lead change per revolution D is out of its range.
+    LeadChangeOutOfRange,
+    /// NC-1065: `gsk-lathe` G92.3: a face thread (no travel along Z) is not allowed.
+    FaceThread,
 }
 
 impl AlarmKind {
     /// Every alarm kind, in declaration order.
-    pub const ALL: [AlarmKind; 33] = [
+    pub const ALL: [AlarmKind; 39] = [
         AlarmKind::ImproperGCode,
         AlarmKind::FeedZero,
         AlarmKind::IllegalSCode,
@@ -112,6 +125,12 @@ impl AlarmKind {
         AlarmKind::ParameterOutOfRange,
         AlarmKind::TapOvershoot,
         AlarmKind::ZeroSpeedNotReported,
+        AlarmKind::ThreadLeadOutOfRange,
+        AlarmKind::ToolWidthAboveLead,
+        AlarmKind::TipWidthAboveLead,
+        AlarmKind::ThreadStepZero,
+        AlarmKind::LeadChangeOutOfRange,
+        AlarmKind::FaceThread,
     ];
 
     /// The alarm number as the trace writes it.
@@ -151,6 +170,12 @@ impl AlarmKind {
             ParameterOutOfRange => "NC-1040",
             TapOvershoot => "NC-1050",
             ZeroSpeedNotReported => "NC-1051",
+            ThreadLeadOutOfRange => "NC-1060",
+            ToolWidthAboveLead => "NC-1061",
+            TipWidthAboveLead => "NC-1062",
+            ThreadStepZero => "NC-1063",
+            LeadChangeOutOfRange => "NC-1064",
+            FaceThread => "NC-1065",
         }
     }
 
@@ -191,6 +216,12 @@ impl AlarmKind {
             ParameterOutOfRange => "PARAMETER OUT OF RANGE",
             TapOvershoot => "TAP OVERSHOOT BEYOND ALLOWANCE",
             ZeroSpeedNotReported => "ZERO SPEED NOT REPORTED",
+            ThreadLeadOutOfRange => "THREAD LEAD OUT OF RANGE",
+            ToolWidthAboveLead => "TOOL WIDTH ABOVE MINIMUM LEAD",
+            TipWidthAboveLead => "TIP WIDTH ABOVE MINIMUM LEAD",
+            ThreadStepZero => "AXIAL STEP Q ZERO",
+            LeadChangeOutOfRange => "LEAD CHANGE D OUT OF RANGE",
+            FaceThread => "FACE THREAD NOT ALLOWED",
         }
     }
 }

@@ -59,6 +59,7 @@ pub static PARAMS: &[ParamDef] = &[
     num("plc.fin_timeout_ms", "FIN timer", Int, 1.0, 600000.0, 10000.0, "ms", "No FIN within this time: alarm NC-1020."),
     num("plc.zsp_ms", "zero-speed detection time", Int, 0.0, 10000.0, 8.0, "ms", "The spindle must stay stopped this long before the drive reports zero speed (ZSP)."),
     num("plc.spindle_stall_ms", "stall timer", Int, 100.0, 600000.0, 100.0, "ms", "Spindle not rotating while rigid tapping commands it for this long: alarm 5074."),
+    bit("nc.thread_retract", "thread retract on feed hold", 0.0, "G92.3 feed hold during a pass: 0 = finish the pass (thread and X out), then hold; 1 = retract at once to the cycle start, hold, and cut the pass again on cycle start (DEC-60)."),
 ];
 
 impl Dialect for GskLathe {

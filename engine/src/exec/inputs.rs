@@ -82,6 +82,8 @@ impl Exec<'_> {
                 let fhd = self.cfg.hold_in_rigid_tap && self.spindle.position_mode;
                 if self.hold_suppressed && !fhd {
                     self.hold_pending = true;
+                } else if self.thread_retract() {
+                    // Thread retract: back to the cycle start, then the hold (GSK-G923-12).
                 } else {
                     self.feed_hold_now();
                 }

@@ -58,6 +58,50 @@ pub enum Path {
         /// Spindle direction, +1 forward.
         spin: f64,
     },
+    /// A thread pass locked to a spindle turning at a steady speed in speed mode: the long axis
+    /// travels `lead·n + dlead·n²/2` after `n` revolutions; every axis moves along the line to
+    /// the end (run-out taken off), the run-out axis adds its run-out over the last part.
+    Thread {
+        /// Revolutions per µs (> 0).
+        rev_us: f64,
+        /// Revolutions the spindle had turned since the pass's index when the motion started
+        /// (the motion starts on a tick, the index falls between ticks).
+        n0: f64,
+        /// Lead at the start, nm/rev.
+        lead: f64,
+        /// Lead change, nm/rev².
+        dlead: f64,
+        /// Travel along the long axis, nm (> 0).
+        len: f64,
+        /// The run-out: axis, extra travel (signed nm), long-axis travel where it begins.
+        runout: Option<(usize, f64, f64)>,
+        /// Duration, µs (whole periods).
+        total: Micros,
+    },
+}
+
+impl Path {
+    /// A thread pass of `len` nm along its long axis at `rev_us` revolutions per µs, starting
+    /// `n0` revolutions after its index: the path, lasting whole periods until the thread's end.
+    pub fn thread(
+        rev_us: f64,
+        n0: f64,
+        lead: f64,
+        dlead: f64,
+        len: f64,
+        runout: Option<(usize, f64, f64)>,
+        period: Micros,
+    ) -> Path {
+        // n where lead·n + dlead·n²/2 = len (the stable form of the quadratic's root).
+        let revs = if dlead == 0.0 {
+            len / lead
+        } else {
+            2.0 * len / (lead + (lead * lead + 2.0 * dlead * len).max(0.0).sqrt())
+        };
+        let left = (revs - n0).max(0.0);
+        let total = crate::units::ceil_to(((left / rev_us).ceil() as Micros).max(1), period.max(1));
+        Path::Thread { rev_us, n0, lead, dlead, len, runout, total }
+    }
 }
 
 /// One motion in progress.
@@ -90,6 +134,7 @@ impl Motion {
             Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
                 profile.total
             }
+            Path::Thread { total, .. } => *total,
         }
     }
 
@@ -126,6 +171,10 @@ impl Motion {
             Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
                 profile.eval(dt).1
             }
+            Path::Thread { rev_us, n0, lead, dlead, .. } => {
+                let n = n0 + rev_us * dt as f64;
+                rev_us * (lead + dlead * n)
+            }
         }
     }
 
@@ -134,6 +183,17 @@ impl Motion {
     pub fn stop_at(&mut self, t: Micros, a: f64, period: Micros) {
         let dt = t.saturating_sub(self.t0);
         let elapsed = dt;
+        if let Path::Thread { .. } = self.path {
+            // A thread is locked to the spindle: it cannot run on along a braking profile; the
+            // axes stop where they are (a thread retract pulls out from there).
+            let here = self.pos_unclamped(t);
+            self.start = here;
+            self.target = here;
+            self.path_end = here;
+            self.t0 = t;
+            self.path = Path::Rapid { profiles: [Profile::still(); AXES], backlash: [0.0; AXES] };
+            return;
+        }
         match &mut self.path {
             Path::Rapid { profiles, .. } => {
                 for p in profiles.iter_mut() {
@@ -143,6 +203,7 @@ impl Motion {
             Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
                 *profile = profile.stop_from(dt, a, period);
             }
+            Path::Thread { .. } => {}
         }
         // Re-anchor: the new profiles start at `t` and measure from the old start.
         self.t0 += elapsed;
@@ -187,6 +248,23 @@ impl Motion {
                 let d = m.target[*axis] - m.start[*axis];
                 let s = (profile.eval(dt).0 - backlash).max(0.0);
                 p[*axis] = m.start[*axis] + (d.signum() as f64 * s).round() as Nm;
+            }
+            Path::Thread { rev_us, n0, lead, dlead, len, runout, total } => {
+                let n = n0 + rev_us * dt.min(*total) as f64;
+                let s = (lead * n + 0.5 * dlead * n * n).clamp(0.0, *len);
+                let f = s / len;
+                for i in 0..AXES {
+                    let ro = match runout {
+                        Some((axis, amount, _)) if *axis == i => *amount,
+                        _ => 0.0,
+                    };
+                    let line = (m.path_end[i] - m.start[i]) as f64 - ro;
+                    p[i] = m.start[i] + (line * f).round() as Nm;
+                }
+                if let Some((axis, amount, from)) = runout {
+                    let g = if *len > *from { ((s - from) / (len - from)).clamp(0.0, 1.0) } else { 1.0 };
+                    p[*axis] += (amount * g).round() as Nm;
+                }
             }
         }
         p

@@ -26,7 +26,10 @@ impl Exec<'_> {
             self.read_block();
             return;
         };
-        if matches!(step, Step::Rapid { .. } | Step::Feed { .. } | Step::Arc { .. } | Step::Tap(_)) {
+        if matches!(
+            step,
+            Step::Rapid { .. } | Step::Feed { .. } | Step::Arc { .. } | Step::Tap(_) | Step::Thread(_)
+        ) {
             self.motion_step = Some(step.clone());
         }
         self.start_step(step);
@@ -108,6 +111,13 @@ impl Exec<'_> {
                 }
             }
             Step::Tap(t) => self.start_tap(t),
+            Step::Thread(t) => self.start_thread(t),
+            Step::Hold => self.hold_force(),
+            Step::SingleBlockStop => {
+                if self.single_block && !self.hold_suppressed {
+                    self.hold_force();
+                }
+            }
             Step::Follow(f) => self.start_follow(f),
             Step::AwaitSignal { signal, value, timeout_us, alarm } => {
                 self.start_await(signal, value, timeout_us, alarm)

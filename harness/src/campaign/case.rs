@@ -25,6 +25,8 @@ pub enum Cycle {
     FanucG84,
     /// `knd-lathe` G93: the tap follows the spindle encoder, brakes past the end point, returns.
     KndG93,
+    /// `gsk-lathe` G92.3: variable-lead threading passes locked to the spindle.
+    GskG923,
 }
 
 impl Cycle {
@@ -34,6 +36,7 @@ impl Cycle {
             Cycle::GskG84 | Cycle::GskG88 => "gsk-lathe",
             Cycle::FanucG84 => "fanuc-mill",
             Cycle::KndG93 => "knd-lathe",
+            Cycle::GskG923 => "gsk-lathe",
         }
     }
 
@@ -397,6 +400,14 @@ impl Case {
             if self.program.clamp {
                 v.push(("170", None, 68.0));
             }
+        } else if self.program.cycle == Cycle::GskG923 {
+            // A threading cycle: no M29 handshake; the feed-hold bit and the Q unit are its own.
+            v.retain(|(id, _, _)| !id.starts_with("plc.sppos") && !id.starts_with("plc.rgtap"));
+            v.extend([
+                ("nc.thread_retract", None, p.rtcrg as u8 as f64),
+                ("182.7", None, p.q_in_mm as u8 as f64),
+                ("34", Some('Z'), backlash),
+            ]);
         } else if self.program.cycle == Cycle::KndG93 {
             // The KND lathe has no M29 handshake: no sppos/rgtap delays (KND-G93-03).
             v.retain(|(id, _, _)| !id.starts_with("plc.sppos") && !id.starts_with("plc.rgtap"));
@@ -477,8 +488,8 @@ impl Case {
         let backlash = (self.params.backlash % 51) as i64 * 1000;
         let valid_lead = !matches!(p.edge, Some(Edge::LeadMax | Edge::LeadBeyond | Edge::LeadZero));
         let overridden = self.inputs.iter().any(|i| matches!(i.action, Action::SpindleOverride(_)));
-        if p.cycle == Cycle::KndG93 {
-            // G93 is no rigid tapping (no F76.3, no RGSPP/RGSPM strokes): the sync, hold and
+        if matches!(p.cycle, Cycle::KndG93 | Cycle::GskG923) {
+            // G93 and G92.3 are no rigid tapping (no F76.3, no RGSPP/RGSPM strokes): the sync, hold and
             // pre-M29 invariants have nothing to look at; INV-09 finds its axis itself.
             return Context {
                 tap: None,

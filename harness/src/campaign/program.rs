@@ -41,6 +41,7 @@ impl Case {
             Cycle::GskG84 | Cycle::GskG88 => self.gsk_program(&mut b),
             Cycle::FanucG84 => self.fanuc_program(&mut b),
             Cycle::KndG93 => self.knd_program(&mut b),
+            Cycle::GskG923 => self.g923_program(&mut b),
         }
         (b.text, b.alarm)
     }
@@ -199,6 +200,69 @@ impl Case {
         b.line(match p.cancel {
             Cancel::G80 | Cancel::Rapid => "G0 Z10.;",
             Cancel::Feed => "G1 Z10. F500;",
+            Cancel::ProgramEnd => "",
+        });
+        b.line("M30;");
+    }
+
+    /// GSK G92.3 (GSK-G923-*): a thread from Z5 down by the depth, tip and tool width a quarter
+    /// of the lead each, 1..3 steps of Q, a lead change D with a deep or high-speed peck choice
+    /// (negative for a left-hand choice when the lead stays positive), run-out with the clamp
+    /// choice; the edges that apply to its words.
+    fn g923_program(&self, b: &mut Blocks) {
+        let p = &self.program;
+        b.line("G98;");
+        if p.feed_move_before {
+            b.line("G1 X50. Z10. F800;");
+        }
+        b.line("G0 X40. Z5.;");
+        let before = p.spindle_before_rpm();
+        // The thread follows the spindle: it always turns (a stopped one is NC-0011 after the
+        // X rapid, which is no range alarm).
+        b.line(&format!("{} S{};", if before < 0 { "M04" } else { "M03" }, before.abs().max(300)));
+        let depth = p.depth_nm();
+        let lead = p.lead_nm();
+        let width = lead / 4;
+        let widen = lead - 2 * width;
+        let q = (widen / p.repeats() as i64 / 100 * 100).max(100);
+        let mut w = vec![format!("G92.3 X36. Z{}", mm(5_000_000 - depth))];
+        match p.edge {
+            Some(Edge::LeadBeyond) => w.push("F500.0001".into()),
+            Some(Edge::LeadZero) => w.push("F0".into()),
+            _ => w.push(format!("F{}", mm(lead))),
+        }
+        if p.edge == Some(Edge::JBeyond) {
+            w.push("J-1. K1.".into());
+        } else if p.clamp {
+            w.push("J0.5 K1.".into());
+        }
+        if p.edge == Some(Edge::OverloadBeyond) {
+            w.push("D501.".into());
+        } else if p.peck != Peck::Standard {
+            let k = 1 + p.dwell_ms() as i64 / 250;
+            // |D| below F²/(4·travel) keeps the lead above 0.7 F (GSK-G923-10).
+            let shrink_ok = lead * lead / (4 * depth) >= k * 1000;
+            let d = if p.left_hand && shrink_ok { -k * 1000 } else { k * 1000 };
+            w.push(format!("D{}", mm(d)));
+        }
+        w.push(format!("E{} A{}", mm(width), mm(width)));
+        match p.edge {
+            Some(Edge::PeckBeyond) => w.push("Q-1.".into()),
+            _ => w.push(format!("Q{}", mm(q))),
+        }
+        b.line(&format!("{};", w.join(" ")));
+        match p.edge {
+            Some(Edge::LeadBeyond | Edge::LeadZero) => b.alarm(AlarmKind::ThreadLeadOutOfRange),
+            Some(Edge::JBeyond | Edge::PeckBeyond) => b.alarm(AlarmKind::WordOutOfRange),
+            Some(Edge::OverloadBeyond) => b.alarm(AlarmKind::LeadChangeOutOfRange),
+            _ => {}
+        }
+        if p.second_hole {
+            b.line("X35.;");
+        }
+        b.line(match p.cancel {
+            Cancel::G80 | Cancel::Rapid => "G0 X50.;",
+            Cancel::Feed => "G1 X50. F500;",
             Cancel::ProgramEnd => "",
         });
         b.line("M30;");

@@ -1,6 +1,8 @@
 //! The `gsk-lathe` interpreter: modal state and block → steps, including G84/G88 rigid tapping
 //! (seed 000; rules GSK-* in `docs/rules/gsk-lathe.md`).
 
+mod g923;
+
 use crate::alarm::{Alarm, AlarmKind};
 use crate::dialect::common::{dwell_p, g_name, speed_s, tool_t, Units, Words};
 use crate::dialect::Interpreter;
@@ -42,6 +44,7 @@ struct Cfg {
     overload_delay_us: Micros,
     overload_pct: u32,
     d_clamp: bool,
+    thread_retract: bool,
     rt_max_rpm: u32,
     spindle_max_rpm: u32,
     increment_nm: i64,
@@ -67,6 +70,8 @@ pub struct GskInterp {
     oriented: bool,
     tap: Option<TapData>,
     inch: bool,
+    /// Modal data of G92.3 (GSK-G923-02).
+    thread: g923::ThreadData,
 }
 
 impl GskInterp {
@@ -88,6 +93,7 @@ impl GskInterp {
             oriented: false,
             tap: None,
             inch: false,
+            thread: g923::ThreadData::default(),
         }
     }
 }
@@ -103,6 +109,7 @@ impl Cfg {
             overload_delay_us: (p.get("270") * 1000.0) as Micros,
             overload_pct: p.get("271") as u32,
             d_clamp: p.get("nc.d_above_150") != 0.0,
+            thread_retract: p.bit("nc.thread_retract"),
             rt_max_rpm: p.get("nc.rt_max_rpm") as u32,
             spindle_max_rpm: p.get("nc.spindle_max_rpm") as u32,
             increment_nm: p.get("nc.increment_nm") as i64,
@@ -510,7 +517,7 @@ impl Interpreter for GskInterp {
         let mut nonmodal = None;
         for &(g, word) in &w.g {
             match g {
-                0 | 10 | 20 | 30 => motion_set = Some(g),
+                0 | 10 | 20 | 30 | 923 => motion_set = Some(g),
                 840 | 880 => cycle_g = Some(g / 10),
                 800 => motion_set = Some(800),
                 40 | 280 | 500 => nonmodal = Some((g, word)),
@@ -530,7 +537,9 @@ impl Interpreter for GskInterp {
         }
         self.units.inch = self.inch;
         let tapping = cycle_g.is_some() || (self.motion == 840 || self.motion == 880) && motion_set.is_none();
-        if !tapping {
+        // In G92.3 F is the lead, not a feed (GSK-G923-03).
+        let threading = motion_set == Some(923) || (self.motion == 923 && motion_set.is_none());
+        if !tapping && !threading {
             self.feed_word(&w)?;
         }
         let mut m_codes = Vec::new();
@@ -617,6 +626,8 @@ impl Interpreter for GskInterp {
             None
         }) {
             self.tap_cycle(g, &w, &mut body)?;
+        } else if self.motion == 923 && (moves || motion_set == Some(923)) {
+            self.g923(&w, &targets, &mut body)?;
         } else if moves {
             let target = self.moved_pos(&targets);
             match self.motion {
@@ -651,6 +662,7 @@ impl Interpreter for GskInterp {
             self.motion = self.saved_motion;
         }
         self.tap = None;
+        self.thread = g923::ThreadData::default();
         self.pos = pos;
     }
 
