@@ -94,7 +94,10 @@ pub struct RecordedMeta {
     pub axes: Vec<AxisSpec>,
     /// Whether samples carry the spindle's speed and angle.
     pub spindle: (bool, bool),
-    /// The signals the file records (edges of the others never come).
+    /// The signals the file declares (edges of the others never come, except in SHDR: there
+    /// STL and SPL of `execution`, the map's signals and those named by a key in the lines up
+    /// to the first event are declared, and a key named after another signal may still bring
+    /// its edges later).
     pub signals: Vec<Signal>,
     /// The sample period the file declares, µs, when it declares one.
     pub sample_us: Option<u64>,
@@ -142,6 +145,11 @@ impl Ctx {
 pub(crate) trait Source {
     /// Reads on, pushing the next events to `out`; `Ok(false)` at the end of the file.
     fn fill(&mut self, ctx: &mut Ctx, out: &mut VecDeque<TraceEvent>) -> Result<bool, ImportError>;
+
+    /// Signals the lines read so far name (SHDR keys), to declare after the first event.
+    fn named_signals(&self) -> Vec<Signal> {
+        Vec::new()
+    }
 }
 
 /// A recorded trace being read: an iterator of events, in file order.
@@ -253,6 +261,11 @@ pub fn from_reader(
         Some(Ok(ev)) => {
             imp.meta.first_t_us = Some(ev.t_us);
             imp.queue.push_front(ev);
+            for s in imp.src.named_signals() {
+                if !imp.meta.signals.contains(&s) {
+                    imp.meta.signals.push(s);
+                }
+            }
         }
         Some(Err(e)) => {
             imp.done = false;

@@ -134,6 +134,7 @@ struct ShdrSource {
     sample: Sample,
     sig: [bool; Signal::ALL.len()],
     last_t: Option<u64>,
+    named: Vec<Signal>,
 }
 
 /// Sets up an SHDR reader (SHDR has no header).
@@ -155,7 +156,8 @@ pub(crate) fn open(
                 .map(|(index, &letter)| AxisSpec { letter, index, diameter: false, rotary: index >= 3 })
                 .collect(),
             (true, true),
-            Signal::ALL.to_vec(),
+            // `execution` gives these; a key named after another signal may add it.
+            vec![Signal::Stl, Signal::Spl],
         ),
     };
     let meta = RecordedMeta {
@@ -176,6 +178,7 @@ pub(crate) fn open(
         sample: Sample::default(),
         sig: [false; Signal::ALL.len()],
         last_t: None,
+        named: Vec::new(),
     };
     Ok((meta, Box::new(src)))
 }
@@ -328,6 +331,9 @@ impl ShdrSource {
                             moved = true;
                         }
                         Key::Signal { signal, level, invert, scale, offset } => {
+                            if !self.named.contains(&signal) {
+                                self.named.push(signal);
+                            }
                             let word = match v.to_ascii_uppercase().as_str() {
                                 "ON" | "TRUE" | "HIGH" => Some(true),
                                 "OFF" | "FALSE" | "LOW" => Some(false),
@@ -425,6 +431,10 @@ impl ShdrSource {
 }
 
 impl Source for ShdrSource {
+    fn named_signals(&self) -> Vec<Signal> {
+        self.named.clone()
+    }
+
     fn fill(&mut self, ctx: &mut Ctx, out: &mut VecDeque<TraceEvent>) -> Result<bool, ImportError> {
         loop {
             self.line_no += 1;

@@ -69,8 +69,9 @@ fn csv_rows_become_samples_and_edges() {
     assert_eq!(s.axes[0], 50_500_000);
     assert_eq!(s.axes[2], -1_500_000);
     assert_eq!(s.spindle_mrpm, 100_000);
-    assert_eq!(evs[3].event, Event::Signal { signal: Signal::Rtap, value: true });
-    assert_eq!(evs[4].event, Event::Signal { signal: Signal::Zsp, value: false });
+    // Falls before rises within a row.
+    assert_eq!(evs[3].event, Event::Signal { signal: Signal::Zsp, value: false });
+    assert_eq!(evs[4].event, Event::Signal { signal: Signal::Rtap, value: true });
     assert_eq!(evs[5].t_us, 2000);
 }
 
