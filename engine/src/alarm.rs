@@ -74,11 +74,14 @@ pub enum AlarmKind {
     /// NC-1051: `knd-lathe` G93: the drive did not report zero speed (ZSP) within the timer after
     /// the spindle was braked or stopped: the cycle cannot reverse ("the tap never retracts").
     ZeroSpeedNotReported,
+    /// NC-1120: an alarm recorded on a real control (`nc-conform check`) whose vendor code the
+    /// engine does not know; the engine never raises it. Its detail is `<vendor code>: <text>`.
+    UnknownVendorAlarm,
 }
 
 impl AlarmKind {
     /// Every alarm kind, in declaration order.
-    pub const ALL: [AlarmKind; 33] = [
+    pub const ALL: [AlarmKind; 34] = [
         AlarmKind::ImproperGCode,
         AlarmKind::FeedZero,
         AlarmKind::IllegalSCode,
@@ -112,6 +115,7 @@ impl AlarmKind {
         AlarmKind::ParameterOutOfRange,
         AlarmKind::TapOvershoot,
         AlarmKind::ZeroSpeedNotReported,
+        AlarmKind::UnknownVendorAlarm,
     ];
 
     /// The alarm number as the trace writes it.
@@ -151,6 +155,7 @@ impl AlarmKind {
             ParameterOutOfRange => "NC-1040",
             TapOvershoot => "NC-1050",
             ZeroSpeedNotReported => "NC-1051",
+            UnknownVendorAlarm => "NC-1120",
         }
     }
 
@@ -191,6 +196,7 @@ impl AlarmKind {
             ParameterOutOfRange => "PARAMETER OUT OF RANGE",
             TapOvershoot => "TAP OVERSHOOT BEYOND ALLOWANCE",
             ZeroSpeedNotReported => "ZERO SPEED NOT REPORTED",
+            UnknownVendorAlarm => "VENDOR ALARM UNKNOWN TO THE REFERENCE",
         }
     }
 }

@@ -400,6 +400,21 @@ fn defective_shdr_recordings_fail_with_the_right_rule() {
     assert_eq!(out.status.code(), Some(1), "{}", stdout(&out));
     let f = fails(&out);
     assert!(f.iter().any(|l| l.contains("COM-PLC-02") && l.contains("F76.3 ↑ missing")), "{f:#?}");
+    // A servo alarm with a vendor code the engine does not know, in the middle of the run:
+    // imported (NC-1120) and reported as unexpected, not refused.
+    let p = shdr_of("shdralarm", &reference, &record(&reference, Rec::REALISTIC), true);
+    let text = std::fs::read_to_string(&p).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    let mid = lines.len() / 2;
+    let stamp = lines[mid].split('|').next().unwrap().to_string();
+    let alarm = format!("{stamp}|system|FAULT|SV0401|||V READY OFF");
+    lines.insert(mid + 1, &alarm);
+    std::fs::write(&p, lines.join("\n") + "\n").unwrap();
+    let out = check(&[CLAMP, "--trace", p.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", stdout(&out));
+    let f = fails(&out);
+    assert!(f.iter().any(|l| l.contains("CHK-EVT-03 unexpected alarm SV0401")), "{f:#?}");
+    assert_eq!(f.len(), 1, "{f:#?}");
     // Feed hold honoured in the cut: execution FEED_HOLD is an SPL edge the reference has not.
     let s = scenario("scenarios/gsk/dry_run/plain_reference_timing.yaml");
     let reference = check_util::reference(&s);

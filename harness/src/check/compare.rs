@@ -369,7 +369,10 @@ impl<'r> Comparator<'r> {
                 Finding::Extra(k, t) => self.diverge(
                     k.topic(),
                     "CHK-EVT-03",
-                    format!("{} extra", k.describe()),
+                    match k {
+                        Key::Alarm(_) => format!("unexpected {}", k.describe()),
+                        _ => format!("{} extra", k.describe()),
+                    },
                     t,
                     format!("no further {}", k.describe()),
                     format!("{} at {}", k.describe(), ms(t.max(0) as u64)),

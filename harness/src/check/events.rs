@@ -30,7 +30,10 @@ impl Key {
         match ev {
             Event::Signal { signal, value } => Some(Key::Edge(*signal, *value)),
             Event::Function { letter, code } => Some(Key::Function(*letter, *code)),
-            Event::Alarm(a) => Some(Key::Alarm(a.kind.code().to_string())),
+            // A vendor alarm the engine does not know is keyed by its vendor code.
+            Event::Alarm(a) => {
+                Some(Key::Alarm(crate::import::vendor_code(a).unwrap_or(a.kind.code()).to_string()))
+            }
             _ => None,
         }
     }

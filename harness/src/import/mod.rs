@@ -28,6 +28,7 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
+use nc_engine::alarm::{Alarm, AlarmKind};
 use nc_engine::trace::{AxisSpec, Signal, TraceEvent, TraceMeta};
 
 pub use error::{ErrorKind, ImportError, Warnings};
@@ -275,6 +276,27 @@ pub fn from_reader(
         None => {}
     }
     Ok(imp)
+}
+
+/// An alarm recorded with a vendor code the engine does not know (`NC-1120`): its detail is
+/// `<code>: <text>` (the text left out when empty).
+pub fn vendor_alarm(code: &str, text: &str) -> Alarm {
+    let detail = if text.is_empty() { code.to_string() } else { format!("{code}: {text}") };
+    Alarm::new(AlarmKind::UnknownVendorAlarm, detail)
+}
+
+/// The vendor code of an alarm made by [`vendor_alarm`] (None for the engine's own kinds).
+pub fn vendor_code(a: &Alarm) -> Option<&str> {
+    (a.kind == AlarmKind::UnknownVendorAlarm)
+        .then(|| a.detail.split_once(": ").map_or(&a.detail[..], |(c, _)| c))
+}
+
+/// The alarm of a recorded code: the engine's kind with that code, else a [`vendor_alarm`].
+pub(crate) fn recorded_alarm(code: &str, text: &str) -> Alarm {
+    match AlarmKind::ALL.iter().copied().find(|k| k.code() == code && *k != AlarmKind::UnknownVendorAlarm) {
+        Some(kind) => Alarm::new(kind, text),
+        None => vendor_alarm(code, text),
+    }
 }
 
 /// Reads one line (up to and without `\n`, and a `\r` before it) into `buf`; `Ok(false)` at the

@@ -14,7 +14,8 @@
 //! - `line` gives a block (its text from a `block` key on the same line, else empty);
 //! - `alarm`: `code|native_code|severity|state|text`, and the conditions `system`, `logic`,
 //!   `motion`, `comms`, `cond`: `level|native_code|native_severity|qualifier|text`; an active
-//!   alarm (`FAULT`) whose native code (else code) is an engine alarm code gives an `alarm` event.
+//!   alarm (`FAULT`) gives an `alarm` event: the engine's alarm of its native code (else code),
+//!   or, for a code the engine does not know, a vendor alarm (`NC-1120`) carrying the code.
 //!
 //! A line with a position or spindle change gives one sample (the last value of everything else
 //! held), before the line's other events. `UNAVAILABLE` changes nothing. Lines starting with `*`
@@ -23,12 +24,12 @@
 use std::collections::VecDeque;
 use std::io::BufRead;
 
-use nc_engine::alarm::{Alarm, AlarmKind};
+use nc_engine::alarm::AlarmKind;
 use nc_engine::trace::{axis_index, AxisSpec, Event, Sample, Signal, TraceEvent, AXIS_LETTERS};
 
 use super::map::{ColRef, ColumnMap, Level};
 use super::num::{f64_to_fixed, parse_f64, parse_u64};
-use super::{char_col, read_line, Ctx, ErrorKind, Format, ImportError, RecordedMeta, Source};
+use super::{char_col, read_line, recorded_alarm, Ctx, ErrorKind, Format, ImportError, RecordedMeta, Source};
 
 /// The longest line read, bytes.
 const MAX_LINE: usize = 1 << 20;
@@ -393,20 +394,24 @@ impl ShdrSource {
                                 (v == "FAULT", [f(2), String::new()], f(5))
                             };
                             if active {
-                                let kind = codes
+                                // The engine's alarm of the native code (else the code); a code
+                                // it does not know is a vendor alarm (NC-1120).
+                                let known = codes
                                     .iter()
                                     .filter(|c| !c.is_empty())
-                                    .find_map(|c| AlarmKind::ALL.iter().copied().find(|k| k.code() == c));
-                                let Some(kind) = kind else {
-                                    let at = fields[i + 2].0;
+                                    .find(|c| AlarmKind::ALL.iter().any(|k| k.code() == c.as_str()));
+                                let Some(code) = known.or(codes.iter().find(|c| !c.is_empty())) else {
                                     return Err(err(
-                                        ErrorKind::Unknown,
-                                        at,
-                                        format!("alarm code `{}` is not an engine alarm", codes[0]),
-                                        "an alarm code of docs/alarms.md",
+                                        ErrorKind::BadRow,
+                                        fields[i + 2].0,
+                                        "an active alarm without a code".into(),
+                                        "a native code (or code) for the alarm",
                                     ));
                                 };
-                                evs.push(TraceEvent { t_us: t, event: Event::Alarm(Alarm::new(kind, text)) });
+                                evs.push(TraceEvent {
+                                    t_us: t,
+                                    event: Event::Alarm(recorded_alarm(code, &text)),
+                                });
                             }
                         }
                         Key::Ignored => {}
