@@ -87,11 +87,14 @@ pub enum AlarmKind {
     LeadChangeOutOfRange,
     /// NC-1065: `gsk-lathe` G92.3: a face thread (no travel along Z) is not allowed.
     FaceThread,
+    /// NC-1120: an alarm recorded on a real control (`nc-conform check`) whose vendor code the
+    /// engine does not know; the engine never raises it. Its detail is `<vendor code>: <text>`.
+    UnknownVendorAlarm,
 }
 
 impl AlarmKind {
     /// Every alarm kind, in declaration order.
-    pub const ALL: [AlarmKind; 39] = [
+    pub const ALL: [AlarmKind; 40] = [
         AlarmKind::ImproperGCode,
         AlarmKind::FeedZero,
         AlarmKind::IllegalSCode,
@@ -131,6 +134,7 @@ impl AlarmKind {
         AlarmKind::ThreadStepZero,
         AlarmKind::LeadChangeOutOfRange,
         AlarmKind::FaceThread,
+        AlarmKind::UnknownVendorAlarm,
     ];
 
     /// The alarm number as the trace writes it.
@@ -176,6 +180,7 @@ impl AlarmKind {
             ThreadStepZero => "NC-1063",
             LeadChangeOutOfRange => "NC-1064",
             FaceThread => "NC-1065",
+            UnknownVendorAlarm => "NC-1120",
         }
     }
 
@@ -222,6 +227,7 @@ impl AlarmKind {
             ThreadStepZero => "AXIAL STEP Q ZERO",
             LeadChangeOutOfRange => "LEAD CHANGE D OUT OF RANGE",
             FaceThread => "FACE THREAD NOT ALLOWED",
+            UnknownVendorAlarm => "VENDOR ALARM UNKNOWN TO THE REFERENCE",
         }
     }
 }

@@ -121,6 +121,7 @@ fn every_alarm_is_documented() {
         ParameterOutOfRange,
         TapOvershoot,
         ZeroSpeedNotReported,
+        UnknownVendorAlarm,
     ];
     for k in all {
         assert!(

@@ -168,6 +168,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         lenient: args.lenient,
     };
     let mut importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
+    let carried = check::Carried::of(importer.meta());
     let mut failure: Option<ImportError> = None;
     let stream = std::iter::from_fn(|| match importer.next()? {
         Ok(ev) => Some(ev),
@@ -176,7 +177,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
             None
         }
     });
-    let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules };
+    let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
     let rep = check::check(&reference, stream.map(|e: TraceEvent| e), &spec);
     if let Some(e) = failure {
         return Err(import_error(&e));

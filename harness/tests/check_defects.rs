@@ -46,24 +46,7 @@ fn feed_hold_honoured_mid_tap_is_caught_gsk_rt_27() {
     let s = scenario("scenarios/gsk/feed_hold/during_cutting.yaml");
     let reference = reference(&s);
     let (cut, _) = phase_spans(&reference, Phase::Cutting)[0];
-    let at = cut + 300_000;
-    let hold = 400_000;
-    let mut t = warp(&reference, |x| Some(if x > at { x + hold } else { x }));
-    let mut frozen = sample_before(&reference, at);
-    frozen.spindle_mrpm = 0;
-    let ev = |t_us, event| TraceEvent { t_us, event };
-    let sig = |signal, value| Event::Signal { signal, value };
-    insert(
-        &mut t,
-        vec![
-            ev(at, Event::Sample(frozen)),
-            ev(at, sig(Signal::Stl, false)),
-            ev(at, sig(Signal::Spl, true)),
-            ev(at + hold, Event::Sample(frozen)),
-            ev(at + hold, sig(Signal::Spl, false)),
-            ev(at + hold, sig(Signal::Stl, true)),
-        ],
-    );
+    let t = feed_hold_at(&reference, cut + 300_000, 400_000);
     let r = check(&s, &reference, record(&t, Rec::REALISTIC));
     caught(&r, &reference, "GSK-RT-27");
 }

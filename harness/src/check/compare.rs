@@ -6,9 +6,10 @@
 
 use nc_engine::trace::{EndSummary, Event, Sample, Signal, Signals, Trace, TraceEvent};
 
+use super::carried::{Carried, NotComparable};
 use super::events::{Finding, Key, Matcher};
 use super::keypoints::KeyTracker;
-use super::reference::{unwrap_delta, Reference};
+use super::reference::{unwrap_delta, MotionDetector, Reference};
 use super::tolerance::{attribute, mm_nm, ms_us, Anchor, Context, Tolerances, Topic};
 use super::{Divergence, Point, MAX_DIVERGENCES};
 use crate::scenario::timeline::{fixed, ms};
@@ -76,13 +77,33 @@ pub struct Comparator<'r> {
     /// Whether the anchor was found.
     pub anchored: bool,
     last_t: i64,
+    /// What the recording can carry.
+    pub(super) carried: Carried,
+    /// Reference events and checks left out because the recording cannot show them.
+    pub not_comparable: Vec<NotComparable>,
+    /// Signals the recording showed an edge of.
+    pub(super) seen: Signals,
+    /// Reference edges never recorded, judged at the end (a signal the recording may not
+    /// carry, a pulse between two rows).
+    pub(super) missing_edges: Vec<(Key, i64)>,
+    /// Longest gap between two recorded samples within the reference's run, µs.
+    pub(super) max_gap_us: i64,
+    last_sample_t: Option<i64>,
+    motion: Option<MotionDetector>,
+    marks: Vec<(i64, i64)>,
 }
 
 impl<'r> Comparator<'r> {
     /// A comparator against `r`.
     pub fn new(r: &'r Reference<'r>, tol: Tolerances, anchor: Anchor, scenario_rules: Vec<String>) -> Self {
+        let threshold = mm_nm(tol.position_mm);
+        let motion = match anchor {
+            Anchor::TapMotion => r.tap.map(|tp| MotionDetector::new(tp.slot, threshold)),
+            _ => None,
+        };
         let ref_anchor = match &anchor {
             Anchor::Offset(_) => None,
+            Anchor::TapMotion => r.tap.and_then(|tp| r.first_motion(tp.slot, threshold)),
             a => r.trace.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
         };
         let offset = match anchor {
@@ -122,7 +143,29 @@ impl<'r> Comparator<'r> {
             max_sync_nm: 0.0,
             max_env_nm: 0.0,
             last_t: 0,
+            carried: Carried::default(),
+            not_comparable: Vec::new(),
+            seen: Signals::default(),
+            missing_edges: Vec::new(),
+            max_gap_us: 0,
+            last_sample_t: None,
+            motion,
+            marks: Vec::new(),
         }
+    }
+
+    /// Compares only what `carried` says the recording can show; the reference events it
+    /// cannot (functions, alarms) are counted as not comparable.
+    pub fn carrying(mut self, carried: Carried) -> Self {
+        let keep = |k: &Key| match k {
+            Key::Function(..) => carried.functions,
+            Key::Alarm(_) => carried.alarms,
+            Key::Edge(..) => true,
+        };
+        self.matcher = Some(Matcher::new_filtered(self.r.trace, keep));
+        self.not_comparable = super::carried::left_out(self.r, &carried);
+        self.carried = carried;
+        self
     }
 
     /// Reference events matched (after [`Comparator::finish`]).
@@ -185,6 +228,20 @@ impl<'r> Comparator<'r> {
     pub fn event(&mut self, ev: TraceEvent) {
         self.events_seen += 1;
         if self.offset.is_none() {
+            let crossing = match (&mut self.motion, &ev.event) {
+                (Some(d), Event::Sample(s)) => d.sample(ev.t_us as i64, s),
+                _ => None,
+            };
+            if let (Some(tc), Some(ra)) = (crossing, self.ref_anchor) {
+                self.motion = None;
+                self.offset = Some(ra - tc);
+                self.anchored = true;
+                for p in std::mem::take(&mut self.pending) {
+                    self.aligned(p);
+                }
+                self.aligned(ev);
+                return;
+            }
             let hit = matches_anchor(&self.anchor, &ev.event);
             match (hit, self.ref_anchor) {
                 (true, Some(ra)) => {
@@ -232,6 +289,12 @@ impl<'r> Comparator<'r> {
         match &ev.event {
             Event::Sample(s) => {
                 self.samples_seen += 1;
+                if t >= 0 && t <= self.r.end_us {
+                    if let Some(p) = self.last_sample_t {
+                        self.max_gap_us = self.max_gap_us.max(t - p);
+                    }
+                }
+                self.last_sample_t = Some(t);
                 self.keys.event(t, &ev.event);
                 self.sync(t, s);
                 self.envelope(t, s);
@@ -252,6 +315,7 @@ impl<'r> Comparator<'r> {
                     return; // a level repeated, not an edge
                 }
                 self.sig.set(*signal, *value);
+                self.seen.set(*signal, true);
                 self.keys.event(t, &ev.event);
                 if matches!(signal, Signal::Rgspp | Signal::Rgspm) {
                     self.stroke_edge();
@@ -300,19 +364,15 @@ impl<'r> Comparator<'r> {
                     format!("at {}", ms(t.max(0) as u64)),
                     format!("{} beyond the window", ms(((t - tr).abs() - w) as u64)),
                 ),
-                Finding::Missing(k, tr) => self.diverge(
-                    k.topic(),
-                    "CHK-EVT-02",
-                    format!("{} missing", k.describe()),
-                    tr,
-                    format!("{} at {}", k.describe(), ms(tr.max(0) as u64)),
-                    "never recorded".into(),
-                    "-".into(),
-                ),
+                Finding::Missing(k @ Key::Edge(..), tr) => self.missing_edges.push((k, tr)),
+                Finding::Missing(k, tr) => self.report_missing(k, tr),
                 Finding::Extra(k, t) => self.diverge(
                     k.topic(),
                     "CHK-EVT-03",
-                    format!("{} extra", k.describe()),
+                    match k {
+                        Key::Alarm(_) => format!("unexpected {}", k.describe()),
+                        _ => format!("{} extra", k.describe()),
+                    },
                     t,
                     format!("no further {}", k.describe()),
                     format!("{} at {}", k.describe(), ms(t.max(0) as u64)),
@@ -342,6 +402,24 @@ impl<'r> Comparator<'r> {
         }
     }
 
+    /// A reference event never recorded (`CHK-EVT-02`).
+    pub(super) fn report_missing(&mut self, k: Key, tr: i64) {
+        self.diverge(
+            k.topic(),
+            "CHK-EVT-02",
+            format!("{} missing", k.describe()),
+            tr,
+            format!("{} at {}", k.describe(), ms(tr.max(0) as u64)),
+            "never recorded".into(),
+            "-".into(),
+        );
+    }
+
+    /// Whether the recording carries `s` (declares it, or showed an edge of it).
+    pub(super) fn carries_signal(&self, s: Signal) -> bool {
+        self.carried.declares(s) || self.seen.get(s)
+    }
+
     fn stroke_edge(&mut self) {
         let on = self.sig.get(Signal::Rgspp) || self.sig.get(Signal::Rgspm);
         if !on {
@@ -364,6 +442,9 @@ impl<'r> Comparator<'r> {
 
     fn sync(&mut self, t: i64, s: &Sample) {
         let Some(tap) = self.r.tap else { return };
+        if !self.carried.angle || !self.carried.axis(tap.slot) {
+            return;
+        }
         let Some(st) = &mut self.stroke else { return };
         if st.pos0 == i64::MIN {
             *st = Stroke { pos0: s.axes[tap.slot], revs: 0.0, prev: (t, *s) };
@@ -420,6 +501,9 @@ impl<'r> Comparator<'r> {
         let tol = mm_nm(self.tol.position_mm) as f64;
         let axes: Vec<_> = self.r.axes().to_vec();
         for (k, a) in axes.iter().enumerate() {
+            if !self.carried.axis(a.index) {
+                continue;
+            }
             let Some((lo, hi)) = self.r.range(t - w, t + w, a.index) else { continue };
             let v = s.axes[a.index] as f64;
             let excess = (lo - tol - v).max(v - hi - tol);
@@ -489,12 +573,18 @@ impl<'r> Comparator<'r> {
         }
         if let Some(m) = self.matcher.take() {
             self.matched = m.matched;
+            self.marks = m.marks();
             m.finish(&mut self.findings);
         }
         self.flush_findings();
+        super::carried::judge_missing_edges(self);
         let keys = std::mem::replace(&mut self.keys, KeyTracker::new(None)).finish();
-        super::keypoints_cmp::compare(self, &keys);
-        self.end_state();
+        if super::carried::key_points_comparable(self) {
+            super::keypoints_cmp::compare(self, &keys);
+        }
+        if self.carried.rpm {
+            self.end_state();
+        }
         (self.compact_trace(), keys)
     }
 
@@ -523,12 +613,18 @@ impl<'r> Comparator<'r> {
     fn compact_trace(&mut self) -> Trace {
         let mut events = std::mem::take(&mut self.compact);
         if !self.had_phases {
-            events.extend(
-                self.r
-                    .phases
-                    .iter()
-                    .map(|&(t, p)| TraceEvent { t_us: t.max(0) as u64, event: Event::Phase(p) }),
-            );
+            // The reference's phases, each moved to the recorded time of a matched event that
+            // marks it (an edge at the same reference time): the recording's own boundaries.
+            let mut prev = 0;
+            for &(t, p) in &self.r.phases {
+                let k = self.marks.partition_point(|m| m.0 < t);
+                let at = match self.marks.get(k) {
+                    Some(&(tr, tq)) if tr == t => tq,
+                    _ => t,
+                };
+                prev = at.max(prev).max(0);
+                events.push(TraceEvent { t_us: prev as u64, event: Event::Phase(p) });
+            }
         }
         events.sort_by_key(|e| e.t_us);
         let state = self.last_sample.map(|x| x.1).unwrap_or_default();

@@ -30,7 +30,10 @@ impl Key {
         match ev {
             Event::Signal { signal, value } => Some(Key::Edge(*signal, *value)),
             Event::Function { letter, code } => Some(Key::Function(*letter, *code)),
-            Event::Alarm(a) => Some(Key::Alarm(a.kind.code().to_string())),
+            // A vendor alarm the engine does not know is keyed by its vendor code.
+            Event::Alarm(a) => {
+                Some(Key::Alarm(crate::import::vendor_code(a).unwrap_or(a.kind.code()).to_string()))
+            }
             _ => None,
         }
     }
@@ -91,6 +94,8 @@ const LOOK_AHEAD: usize = 4;
 pub struct Matcher {
     queues: BTreeMap<Key, Queue>,
     keys: Vec<Key>,
+    ref_t: Vec<i64>,
+    rec_t: Vec<Option<i64>>,
     last: Option<(usize, i64)>,
     /// Events matched.
     pub matched: usize,
@@ -101,16 +106,30 @@ pub struct Matcher {
 impl Matcher {
     /// A matcher over the reference's discrete events.
     pub fn new(reference: &Trace) -> Matcher {
+        Matcher::new_filtered(reference, |_| true)
+    }
+
+    /// A matcher over the reference's discrete events that `keep` accepts (those a recording
+    /// can carry).
+    pub fn new_filtered(reference: &Trace, keep: impl Fn(&Key) -> bool) -> Matcher {
         let mut queues: BTreeMap<Key, Queue> = BTreeMap::new();
         let mut keys = Vec::new();
+        let mut ref_t = Vec::new();
         for e in &reference.events {
-            if let Some(k) = Key::of(&e.event) {
+            if let Some(k) = Key::of(&e.event).filter(|k| keep(k)) {
                 queues.entry(k.clone()).or_default().refs.push((e.t_us as i64, keys.len()));
                 keys.push(k);
+                ref_t.push(e.t_us as i64);
             }
         }
         let total = keys.len();
-        Matcher { queues, keys, last: None, matched: 0, total }
+        let rec_t = vec![None; total];
+        Matcher { queues, keys, ref_t, rec_t, last: None, matched: 0, total }
+    }
+
+    /// The matched events so far: (reference time, recorded time), in the reference's order.
+    pub fn marks(&self) -> Vec<(i64, i64)> {
+        self.ref_t.iter().zip(&self.rec_t).filter_map(|(&r, q)| q.map(|q| (r, q))).collect()
     }
 
     /// A recorded event at aligned time `t`; findings go to `out`.
@@ -142,6 +161,7 @@ impl Matcher {
         q.next = k + 1;
         let (t_ref, idx) = q.refs[k];
         self.matched += 1;
+        self.rec_t[idx] = Some(t);
         if (t_ref - t).abs() > w {
             out.push(Finding::Late(key.clone(), t_ref, t, w));
         }

@@ -2,6 +2,8 @@
 //! and retract height, the hole bottom, the pause at the bottom of each cut (the dwell), the
 //! return level, the number of spindle reversals.
 
+use nc_engine::trace::Signal;
+
 use super::compare::Comparator;
 use super::keypoints::KeyPoints;
 use super::tolerance::{mm_nm, ms_us, Topic};
@@ -61,7 +63,9 @@ pub fn compare(c: &mut Comparator, rec: &KeyPoints) {
     };
     points(c, "CHK-KEY-02", "peck depth", Topic::Pecks, &rp, &qp);
     points(c, "CHK-KEY-03", "retract height", Topic::Pecks, &refk.retracts(), &rec.retracts());
-    let returns = |k: &KeyPoints| k.returns.clone();
+    // The return level and the reversals need F76.3 (else noted as not comparable).
+    let rtap = c.carries_signal(Signal::Rtap);
+    let returns = |k: &KeyPoints| if rtap { k.returns.clone() } else { Vec::new() };
     points(c, "CHK-KEY-05", "return level", Topic::Bottom, &returns(&refk), &returns(rec));
     if let (Some(a), Some(b)) = (refk.bottom(), rec.bottom()) {
         let unc = |k: &KeyPoints| k.pecks().iter().find(|p| p.1 == k.bottom()).map_or(0, |p| p.2);
@@ -92,6 +96,9 @@ pub fn compare(c: &mut Comparator, rec: &KeyPoints) {
                 ms(((x.1 - y.1).abs() - dtol) as u64),
             );
         }
+    }
+    if !rtap {
+        return;
     }
     if refk.returns.len() != rec.returns.len() {
         let t = refk.returns.last().map_or(t0, |r| r.0);

@@ -13,6 +13,7 @@
 //! The scenario's temporal rules run on a compact copy of the recorded trace through
 //! [`crate::scenario::expect::evaluate_discrete`].
 
+pub mod carried;
 pub mod compare;
 pub mod events;
 pub mod html;
@@ -26,6 +27,7 @@ use nc_engine::trace::{Signal, Trace, TraceEvent};
 use serde::Serialize;
 
 use crate::scenario::expect::{self, Expectations, Verdict};
+pub use carried::{Carried, NotComparable};
 pub use tolerance::{Anchor, Tolerances};
 
 /// Most divergences listed one by one (the rest are counted).
@@ -74,6 +76,8 @@ pub struct CheckSpec<'a> {
     pub expect: Option<&'a Expectations>,
     /// The scenario's rule ids (preferred in attribution).
     pub rules: Vec<String>,
+    /// What the recording can carry (default: everything); `Carried::of(importer.meta())`.
+    pub carried: Carried,
 }
 
 /// Counts and extremes of a comparison.
@@ -110,6 +114,8 @@ pub struct Report {
     pub offset_us: i64,
     /// The tolerances used.
     pub tolerances: Tolerances,
+    /// Reference events and checks left out because the recording cannot show them.
+    pub not_comparable: Vec<NotComparable>,
     /// Counts and extremes.
     pub figures: Figures,
     /// The compact recorded trace, aligned (for diagrams).
@@ -139,7 +145,8 @@ impl Report {
     }
 }
 
-/// The default anchor for `reference`: its first M29, else its first STL ↑, else offset 0.
+/// The default anchor for `reference` recorded in a format that carries everything: its first
+/// M29, else its first STL ↑, else offset 0 (see [`Carried::default_anchor`] for the others).
 pub fn default_anchor(reference: &Trace) -> Anchor {
     if reference.functions().any(|(_, l, c)| l == 'M' && c == 29) {
         Anchor::Function('M', 29)
@@ -153,8 +160,10 @@ pub fn default_anchor(reference: &Trace) -> Anchor {
 /// Compares the recorded events (time as recorded, in order) with `reference`.
 pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, spec: &CheckSpec) -> Report {
     let r = reference::Reference::new(reference);
-    let anchor = spec.anchor.clone().unwrap_or_else(|| default_anchor(reference));
-    let mut c = compare::Comparator::new(&r, spec.tolerances.clone(), anchor.clone(), spec.rules.clone());
+    let anchor =
+        spec.anchor.clone().unwrap_or_else(|| spec.carried.default_anchor(reference, r.tap.map(|t| t.slot)));
+    let mut c = compare::Comparator::new(&r, spec.tolerances.clone(), anchor.clone(), spec.rules.clone())
+        .carrying(spec.carried.clone());
     for ev in recorded {
         c.event(ev);
     }
@@ -162,6 +171,20 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
     let mut rules = Vec::new();
     if let Some(exp) = spec.expect {
         rules = expect::evaluate_discrete(exp, &compact);
+        // A rule over a signal the recording does not carry cannot be judged on it.
+        rules.retain(|v| {
+            match Signal::ALL.iter().find(|&&s| !c.carries_signal(s) && carried::mentions(v, s)) {
+                Some(s) => {
+                    c.not_comparable.push(NotComparable {
+                        what: format!("scenario rule {} {}", v.rule, v.what),
+                        count: 0,
+                        reason: format!("{} carries no {}", spec.carried.source, s.name()),
+                    });
+                    false
+                }
+                None => true,
+            }
+        });
         for v in rules.iter().filter(|v| !v.pass) {
             c.push(Divergence {
                 rule: v.rule.clone(),
@@ -190,6 +213,7 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
         anchor: if c.anchored { anchor.describe() } else { format!("{} (not found)", anchor.describe()) },
         offset_us: c.offset(),
         tolerances: spec.tolerances.clone(),
+        not_comparable: std::mem::take(&mut c.not_comparable),
         figures: Figures { matched_events: c.matched(), ..figures },
         recorded: compact,
         series: std::mem::take(&mut c.series),

@@ -52,7 +52,47 @@ pub fn unwrap_delta(a0: i64, m0: i64, a1: i64, m1: i64, dt_us: i64) -> f64 {
     expected + diff
 }
 
+/// Finds the first motion of one axis in a stream of samples: the time it first strays more
+/// than a threshold from where it stood at the first sample, interpolated between the two
+/// samples around the crossing.
+#[derive(Debug, Clone, Copy)]
+pub struct MotionDetector {
+    slot: usize,
+    threshold_nm: i64,
+    start: Option<i64>,
+    prev: Option<(i64, i64)>,
+}
+
+impl MotionDetector {
+    /// A detector for axis `slot` (threshold at least 1 nm).
+    pub fn new(slot: usize, threshold_nm: i64) -> MotionDetector {
+        MotionDetector { slot, threshold_nm: threshold_nm.max(1), start: None, prev: None }
+    }
+
+    /// One sample at `t`; the time of the crossing once it is found (then every later call
+    /// finds it again from the new sample: call it until the first `Some`).
+    pub fn sample(&mut self, t: i64, s: &Sample) -> Option<i64> {
+        let p = s.axes[self.slot];
+        let p0 = *self.start.get_or_insert(p);
+        let prev = self.prev.replace((t, p));
+        let dev = p - p0;
+        if dev.abs() <= self.threshold_nm {
+            return None;
+        }
+        let (tp, pp) = prev?;
+        let target = p0 + self.threshold_nm * dev.signum();
+        let f = (target - pp) as f64 / (p - pp) as f64;
+        Some(tp + (f.clamp(0.0, 1.0) * (t - tp) as f64).round() as i64)
+    }
+}
+
 impl<'a> Reference<'a> {
+    /// The first motion of axis `slot` (see [`MotionDetector`]).
+    pub fn first_motion(&self, slot: usize, threshold_nm: i64) -> Option<i64> {
+        let mut d = MotionDetector::new(slot, threshold_nm);
+        self.t.iter().zip(&self.s).find_map(|(&t, s)| d.sample(t, s))
+    }
+
     /// Indexes `trace`.
     pub fn new(trace: &'a Trace) -> Reference<'a> {
         let mut t = Vec::new();

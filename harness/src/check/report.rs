@@ -45,6 +45,9 @@ pub fn summary(rep: &Report, reference: &Trace, title: &str) -> String {
     for v in rep.rules.iter().filter(|v| v.pass) {
         let _ = writeln!(s, "  ok   {} {}", v.rule, v.what);
     }
+    for n in &rep.not_comparable {
+        let _ = writeln!(s, "  n/a  {}: not comparable: {}", not_comparable_what(n), n.reason);
+    }
     if rep.conformant() {
         let _ = writeln!(s, "CONFORMANT: no divergence");
         return s;
@@ -75,6 +78,15 @@ pub fn summary(rep: &Report, reference: &Trace, title: &str) -> String {
         s.push_str(&timing_diagram(&rep.recorded, &spec));
     }
     s
+}
+
+/// `M29, M30 (2 reference events)`, or the check alone when it counts no events.
+fn not_comparable_what(n: &super::NotComparable) -> String {
+    if n.count == 0 {
+        n.what.clone()
+    } else {
+        format!("{} ({} reference event{})", n.what, n.count, if n.count == 1 { "" } else { "s" })
+    }
 }
 
 /// The diagram window around `t`: the signals that change in either trace, the tap axis and the
@@ -181,8 +193,18 @@ pub fn junit(rep: &Report, suite: &str) -> String {
             );
         }
     }
+    let skipped = rep.not_comparable.len();
+    for n in &rep.not_comparable {
+        tests += 1;
+        let _ = write!(
+            cases,
+            "    <testcase classname=\"not-comparable\" name=\"{}\">\n      <skipped message=\"{}\"/>\n    </testcase>\n",
+            xml_escape(&not_comparable_what(n)),
+            xml_escape(&format!("not comparable: {}", n.reason))
+        );
+    }
     format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"nc-conform check\" tests=\"{tests}\" failures=\"{failures}\">\n  <testsuite name=\"{}\" tests=\"{tests}\" failures=\"{failures}\" errors=\"0\" skipped=\"0\">\n{cases}  </testsuite>\n</testsuites>\n",
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"nc-conform check\" tests=\"{tests}\" failures=\"{failures}\" skipped=\"{skipped}\">\n  <testsuite name=\"{}\" tests=\"{tests}\" failures=\"{failures}\" errors=\"0\" skipped=\"{skipped}\">\n{cases}  </testsuite>\n</testsuites>\n",
         xml_escape(suite)
     )
 }

@@ -79,11 +79,18 @@ pub enum Anchor {
     Edge(Signal, bool),
     /// An explicit offset: reference time = recorded time + offset.
     Offset(i64),
+    /// The first motion of the tap axis (beyond `position_mm` from where it stood): for a
+    /// recording that carries neither functions nor the cycle-start and rigid-tapping signals.
+    TapMotion,
 }
 
 impl Anchor {
-    /// Parses `M29`, `S1000`, `STL`, `RGTAP:0`, `offset:-1500` (µs).
+    /// Parses `M29`, `S1000`, `STL`, `RGTAP:0`, `motion` (the first motion of the tap axis),
+    /// `offset:-1500` (µs).
     pub fn parse(s: &str) -> Option<Anchor> {
+        if s.eq_ignore_ascii_case("motion") {
+            return Some(Anchor::TapMotion);
+        }
         if let Some(v) = s.strip_prefix("offset:") {
             return v.trim().parse().ok().map(Anchor::Offset);
         }
@@ -106,6 +113,7 @@ impl Anchor {
             Anchor::Function(l, c) => format!("first {l}{c}"),
             Anchor::Edge(s, v) => format!("first {} = {}", s.name(), *v as u8),
             Anchor::Offset(o) => format!("offset {o} µs"),
+            Anchor::TapMotion => "first motion of the tap axis".into(),
         }
     }
 }
@@ -240,6 +248,7 @@ mod tests {
         assert_eq!(Anchor::parse("STL"), Some(Anchor::Edge(Signal::Stl, true)));
         assert_eq!(Anchor::parse("RGTAP:0"), Some(Anchor::Edge(Signal::Rgtap, false)));
         assert_eq!(Anchor::parse("offset:-15"), Some(Anchor::Offset(-15)));
+        assert_eq!(Anchor::parse("motion"), Some(Anchor::TapMotion));
         assert_eq!(Anchor::parse("bogus"), None);
         assert_eq!(Anchor::parse(""), None);
     }

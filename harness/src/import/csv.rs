@@ -489,13 +489,17 @@ impl Source for CsvSource {
                 Ok(t) => {
                     self.last_t = Some(t);
                     out.push_back(TraceEvent { t_us: t, event: Event::Sample(sample) });
-                    for (i, s) in self.sigs.iter().enumerate() {
-                        if self.new_levels[i] != self.levels[i] {
-                            self.levels[i] = self.new_levels[i];
-                            out.push_back(TraceEvent {
-                                t_us: t,
-                                event: Event::Signal { signal: s.signal, value: self.levels[i] },
-                            });
+                    // Falls before rises: a row cannot tell the order of changes between two
+                    // rows, and a handshake (RGSPP off, RGSPM on) never has both on.
+                    for rise in [false, true] {
+                        for (i, s) in self.sigs.iter().enumerate() {
+                            if self.new_levels[i] != self.levels[i] && self.new_levels[i] == rise {
+                                self.levels[i] = rise;
+                                out.push_back(TraceEvent {
+                                    t_us: t,
+                                    event: Event::Signal { signal: s.signal, value: rise },
+                                });
+                            }
                         }
                     }
                     return Ok(true);

@@ -28,6 +28,7 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
+use nc_engine::alarm::{Alarm, AlarmKind};
 use nc_engine::trace::{AxisSpec, Signal, TraceEvent, TraceMeta};
 
 pub use error::{ErrorKind, ImportError, Warnings};
@@ -94,7 +95,10 @@ pub struct RecordedMeta {
     pub axes: Vec<AxisSpec>,
     /// Whether samples carry the spindle's speed and angle.
     pub spindle: (bool, bool),
-    /// The signals the file records (edges of the others never come).
+    /// The signals the file declares (edges of the others never come, except in SHDR: there
+    /// STL and SPL of `execution`, the map's signals and those named by a key in the lines up
+    /// to the first event are declared, and a key named after another signal may still bring
+    /// its edges later).
     pub signals: Vec<Signal>,
     /// The sample period the file declares, µs, when it declares one.
     pub sample_us: Option<u64>,
@@ -142,6 +146,11 @@ impl Ctx {
 pub(crate) trait Source {
     /// Reads on, pushing the next events to `out`; `Ok(false)` at the end of the file.
     fn fill(&mut self, ctx: &mut Ctx, out: &mut VecDeque<TraceEvent>) -> Result<bool, ImportError>;
+
+    /// Signals the lines read so far name (SHDR keys), to declare after the first event.
+    fn named_signals(&self) -> Vec<Signal> {
+        Vec::new()
+    }
 }
 
 /// A recorded trace being read: an iterator of events, in file order.
@@ -253,6 +262,11 @@ pub fn from_reader(
         Some(Ok(ev)) => {
             imp.meta.first_t_us = Some(ev.t_us);
             imp.queue.push_front(ev);
+            for s in imp.src.named_signals() {
+                if !imp.meta.signals.contains(&s) {
+                    imp.meta.signals.push(s);
+                }
+            }
         }
         Some(Err(e)) => {
             imp.done = false;
@@ -262,6 +276,27 @@ pub fn from_reader(
         None => {}
     }
     Ok(imp)
+}
+
+/// An alarm recorded with a vendor code the engine does not know (`NC-1120`): its detail is
+/// `<code>: <text>` (the text left out when empty).
+pub fn vendor_alarm(code: &str, text: &str) -> Alarm {
+    let detail = if text.is_empty() { code.to_string() } else { format!("{code}: {text}") };
+    Alarm::new(AlarmKind::UnknownVendorAlarm, detail)
+}
+
+/// The vendor code of an alarm made by [`vendor_alarm`] (None for the engine's own kinds).
+pub fn vendor_code(a: &Alarm) -> Option<&str> {
+    (a.kind == AlarmKind::UnknownVendorAlarm)
+        .then(|| a.detail.split_once(": ").map_or(&a.detail[..], |(c, _)| c))
+}
+
+/// The alarm of a recorded code: the engine's kind with that code, else a [`vendor_alarm`].
+pub(crate) fn recorded_alarm(code: &str, text: &str) -> Alarm {
+    match AlarmKind::ALL.iter().copied().find(|k| k.code() == code && *k != AlarmKind::UnknownVendorAlarm) {
+        Some(kind) => Alarm::new(kind, text),
+        None => vendor_alarm(code, text),
+    }
 }
 
 /// Reads one line (up to and without `\n`, and a `\r` before it) into `buf`; `Ok(false)` at the

@@ -14,7 +14,8 @@
 //! - `line` gives a block (its text from a `block` key on the same line, else empty);
 //! - `alarm`: `code|native_code|severity|state|text`, and the conditions `system`, `logic`,
 //!   `motion`, `comms`, `cond`: `level|native_code|native_severity|qualifier|text`; an active
-//!   alarm (`FAULT`) whose native code (else code) is an engine alarm code gives an `alarm` event.
+//!   alarm (`FAULT`) gives an `alarm` event: the engine's alarm of its native code (else code),
+//!   or, for a code the engine does not know, a vendor alarm (`NC-1120`) carrying the code.
 //!
 //! A line with a position or spindle change gives one sample (the last value of everything else
 //! held), before the line's other events. `UNAVAILABLE` changes nothing. Lines starting with `*`
@@ -23,12 +24,12 @@
 use std::collections::VecDeque;
 use std::io::BufRead;
 
-use nc_engine::alarm::{Alarm, AlarmKind};
+use nc_engine::alarm::AlarmKind;
 use nc_engine::trace::{axis_index, AxisSpec, Event, Sample, Signal, TraceEvent, AXIS_LETTERS};
 
 use super::map::{ColRef, ColumnMap, Level};
 use super::num::{f64_to_fixed, parse_f64, parse_u64};
-use super::{char_col, read_line, Ctx, ErrorKind, Format, ImportError, RecordedMeta, Source};
+use super::{char_col, read_line, recorded_alarm, Ctx, ErrorKind, Format, ImportError, RecordedMeta, Source};
 
 /// The longest line read, bytes.
 const MAX_LINE: usize = 1 << 20;
@@ -134,6 +135,7 @@ struct ShdrSource {
     sample: Sample,
     sig: [bool; Signal::ALL.len()],
     last_t: Option<u64>,
+    named: Vec<Signal>,
 }
 
 /// Sets up an SHDR reader (SHDR has no header).
@@ -155,7 +157,8 @@ pub(crate) fn open(
                 .map(|(index, &letter)| AxisSpec { letter, index, diameter: false, rotary: index >= 3 })
                 .collect(),
             (true, true),
-            Signal::ALL.to_vec(),
+            // `execution` gives these; a key named after another signal may add it.
+            vec![Signal::Stl, Signal::Spl],
         ),
     };
     let meta = RecordedMeta {
@@ -176,6 +179,7 @@ pub(crate) fn open(
         sample: Sample::default(),
         sig: [false; Signal::ALL.len()],
         last_t: None,
+        named: Vec::new(),
     };
     Ok((meta, Box::new(src)))
 }
@@ -328,6 +332,9 @@ impl ShdrSource {
                             moved = true;
                         }
                         Key::Signal { signal, level, invert, scale, offset } => {
+                            if !self.named.contains(&signal) {
+                                self.named.push(signal);
+                            }
                             let word = match v.to_ascii_uppercase().as_str() {
                                 "ON" | "TRUE" | "HIGH" => Some(true),
                                 "OFF" | "FALSE" | "LOW" => Some(false),
@@ -387,20 +394,24 @@ impl ShdrSource {
                                 (v == "FAULT", [f(2), String::new()], f(5))
                             };
                             if active {
-                                let kind = codes
+                                // The engine's alarm of the native code (else the code); a code
+                                // it does not know is a vendor alarm (NC-1120).
+                                let known = codes
                                     .iter()
                                     .filter(|c| !c.is_empty())
-                                    .find_map(|c| AlarmKind::ALL.iter().copied().find(|k| k.code() == c));
-                                let Some(kind) = kind else {
-                                    let at = fields[i + 2].0;
+                                    .find(|c| AlarmKind::ALL.iter().any(|k| k.code() == c.as_str()));
+                                let Some(code) = known.or(codes.iter().find(|c| !c.is_empty())) else {
                                     return Err(err(
-                                        ErrorKind::Unknown,
-                                        at,
-                                        format!("alarm code `{}` is not an engine alarm", codes[0]),
-                                        "an alarm code of docs/alarms.md",
+                                        ErrorKind::BadRow,
+                                        fields[i + 2].0,
+                                        "an active alarm without a code".into(),
+                                        "a native code (or code) for the alarm",
                                     ));
                                 };
-                                evs.push(TraceEvent { t_us: t, event: Event::Alarm(Alarm::new(kind, text)) });
+                                evs.push(TraceEvent {
+                                    t_us: t,
+                                    event: Event::Alarm(recorded_alarm(code, &text)),
+                                });
                             }
                         }
                         Key::Ignored => {}
@@ -425,6 +436,10 @@ impl ShdrSource {
 }
 
 impl Source for ShdrSource {
+    fn named_signals(&self) -> Vec<Signal> {
+        self.named.clone()
+    }
+
     fn fill(&mut self, ctx: &mut Ctx, out: &mut VecDeque<TraceEvent>) -> Result<bool, ImportError> {
         loop {
             self.line_no += 1;

@@ -69,8 +69,9 @@ fn csv_rows_become_samples_and_edges() {
     assert_eq!(s.axes[0], 50_500_000);
     assert_eq!(s.axes[2], -1_500_000);
     assert_eq!(s.spindle_mrpm, 100_000);
-    assert_eq!(evs[3].event, Event::Signal { signal: Signal::Rtap, value: true });
-    assert_eq!(evs[4].event, Event::Signal { signal: Signal::Zsp, value: false });
+    // Falls before rises within a row.
+    assert_eq!(evs[3].event, Event::Signal { signal: Signal::Zsp, value: false });
+    assert_eq!(evs[4].event, Event::Signal { signal: Signal::Rtap, value: true });
     assert_eq!(evs[5].t_us, 2000);
 }
 
@@ -244,11 +245,11 @@ fn jsonl_reads_every_kind() {
     2,
     "time goes back"
 )]
-#[case::unknown_alarm(
-    "{\"t_us\":5,\"kind\":\"alarm\",\"code\":\"9999\",\"message\":\"X\"}\n",
+#[case::alarm_without_code(
+    "{\"t_us\":5,\"kind\":\"alarm\",\"code\":\"\",\"message\":\"X\"}\n",
     2,
     26,
-    "unknown alarm code"
+    "an alarm without a code"
 )]
 #[case::no_end("{\"t_us\":5,\"kind\":\"phase\",\"name\":\"idle\"}\n", 3, 0, "without its `end` line")]
 #[case::axis_missing(
@@ -422,7 +423,7 @@ fn shdr_lines_become_events() {
 #[case::missing_value("2024-05-01T10:00:00Z|Xact\n", 1, 26, "without its 1 value")]
 #[case::time_back("2024-05-01T10:00:01Z|Xact|1\n2024-05-01T10:00:00Z|Xact|2\n", 2, 1, "time goes back")]
 #[case::bad_exec("2024-05-01T10:00:00Z|execution|RUNNING\n", 1, 32, "bad value")]
-#[case::unknown_alarm("2024-05-01T10:00:00Z|system|FAULT|9999||| no such\n", 1, 35, "not an engine alarm")]
+#[case::alarm_without_code("2024-05-01T10:00:00Z|system|FAULT|||| no such\n", 1, 35, "without a code")]
 fn shdr_errors_name_line_and_column(
     #[case] text: &str,
     #[case] line: u64,
@@ -482,4 +483,37 @@ fn far_lines_keep_their_location_without_a_snippet() {
     let d: crate::diag::InputError = e.into();
     assert_eq!(d.headline(), "small.csv:3:2: bad; expected good");
     assert!(d.render_plain().contains("3 | 1,x"), "{}", d.render_plain());
+}
+
+#[test]
+fn alarms_of_unknown_vendor_codes_import_with_their_code() {
+    use nc_engine::alarm::AlarmKind;
+    let shdr = "2024-05-01T10:00:00Z|system|FAULT|9999||| spindle amp\n2024-05-01T10:00:01Z|alarm|EX|0204|FAULT|ACTIVE|Z moved\n";
+    let (evs, res, _) = import(Some(Format::Shdr), shdr, None, false);
+    res.unwrap();
+    let alarms: Vec<_> = evs
+        .iter()
+        .filter_map(|e| match &e.event {
+            Event::Alarm(a) => Some(a.clone()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(alarms.len(), 2, "{evs:?}");
+    assert_eq!(alarms[0].kind, AlarmKind::UnknownVendorAlarm);
+    assert_eq!(super::vendor_code(&alarms[0]), Some("9999"));
+    assert_eq!(alarms[0].detail, "9999: spindle amp");
+    assert_eq!(alarms[1].kind, AlarmKind::IllegalAxisOperation);
+    assert_eq!(super::vendor_code(&alarms[1]), None);
+    let jsonl = JSONL.replace(
+        r#""code":"0204","message":"ILLEGAL AXIS OPERATION: Z moved (line 7, column 3)""#,
+        r#""code":"SV0401","message":"V READY OFF""#,
+    );
+    assert_ne!(jsonl, JSONL);
+    let (evs, res, _) = import(Some(Format::Jsonl), &jsonl, None, false);
+    let a = evs.iter().find_map(|e| match &e.event {
+        Event::Alarm(a) => Some(a.clone()),
+        _ => None,
+    });
+    let a = a.unwrap_or_else(|| panic!("{res:?} {evs:?}"));
+    assert_eq!(super::vendor_code(&a), Some("SV0401"));
 }

@@ -179,6 +179,29 @@ pub fn warp(trace: &Trace, f: impl Fn(u64) -> Option<u64>) -> Trace {
     Trace { meta: trace.meta.clone(), events }
 }
 
+/// A controller that honours a feed hold `hold` µs long at `at` (where the reference does not):
+/// everything after `at` comes `hold` later, the machine stands still meanwhile with the
+/// spindle stopped, STL off and SPL on.
+pub fn feed_hold_at(reference: &Trace, at: u64, hold: u64) -> Trace {
+    let mut t = warp(reference, |x| Some(if x > at { x + hold } else { x }));
+    let mut frozen = sample_before(reference, at);
+    frozen.spindle_mrpm = 0;
+    let ev = |t_us, event| TraceEvent { t_us, event };
+    let sig = |signal, value| Event::Signal { signal, value };
+    insert(
+        &mut t,
+        vec![
+            ev(at, Event::Sample(frozen)),
+            ev(at, sig(Signal::Stl, false)),
+            ev(at, sig(Signal::Spl, true)),
+            ev(at + hold, Event::Sample(frozen)),
+            ev(at + hold, sig(Signal::Spl, false)),
+            ev(at + hold, sig(Signal::Stl, true)),
+        ],
+    );
+    t
+}
+
 /// Inserts events into a trace, in time order (after those already at the same time).
 pub fn insert(trace: &mut Trace, new: Vec<TraceEvent>) {
     trace.events.extend(new);
