@@ -147,6 +147,8 @@ pub fn judge(s: &Scenario, driven: &Driven, reference: &Trace, tolerances: &Tole
                 anchor: None,
                 expect: None,
                 rules: s.rules.clone(),
+                // A controller's outputs are full trace events: everything is comparable.
+                carried: Default::default(),
             };
             // A comparison the reference fails against itself (the absolute sync error of a
             // stalled spindle, ...) says nothing about the controller: it is left out, noted.
