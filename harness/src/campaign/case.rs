@@ -25,6 +25,8 @@ pub enum Cycle {
     FanucG84,
     /// `knd-lathe` G93: the tap follows the spindle encoder, brakes past the end point, returns.
     KndG93,
+    /// `linuxcnc` G33.1: the tap follows the spindle in, through its reversal and back out.
+    LinuxcncG33_1,
 }
 
 impl Cycle {
@@ -34,6 +36,7 @@ impl Cycle {
             Cycle::GskG84 | Cycle::GskG88 => "gsk-lathe",
             Cycle::FanucG84 => "fanuc-mill",
             Cycle::KndG93 => "knd-lathe",
+            Cycle::LinuxcncG33_1 => "linuxcnc",
         }
     }
 
@@ -405,6 +408,10 @@ impl Case {
                 ("003.RVDL", None, p.rtcrg as u8 as f64),
                 ("nc.backlash_mm", Some('Z'), backlash),
             ]);
+        } else if self.program.cycle == Cycle::LinuxcncG33_1 {
+            // LinuxCNC has no M29 handshake either; the reversal follows `nc.spindle_ramp_ms`.
+            v.retain(|(id, _, _)| !id.starts_with("plc.sppos") && !id.starts_with("plc.rgtap"));
+            v.push(("nc.backlash_mm", Some('Z'), backlash));
         } else {
             v.extend([
                 ("5261", None, rt_ramp),
@@ -477,7 +484,7 @@ impl Case {
         let backlash = (self.params.backlash % 51) as i64 * 1000;
         let valid_lead = !matches!(p.edge, Some(Edge::LeadMax | Edge::LeadBeyond | Edge::LeadZero));
         let overridden = self.inputs.iter().any(|i| matches!(i.action, Action::SpindleOverride(_)));
-        if p.cycle == Cycle::KndG93 {
+        if matches!(p.cycle, Cycle::KndG93 | Cycle::LinuxcncG33_1) {
             // G93 is no rigid tapping (no F76.3, no RGSPP/RGSPM strokes): the sync, hold and
             // pre-M29 invariants have nothing to look at; INV-09 finds its axis itself.
             return Context {
