@@ -95,11 +95,27 @@ fn benches(c: &mut Criterion) {
     g.throughput(Throughput::Elements(probe.last_t));
     g.bench_function("gsk_g92_3_1ms_samples", |b| b.iter(|| run_once(&gm, &gprog, &opts)));
     g.finish();
+
+    // linuxcnc: LinuxCNC's own g76only.ngc (35 synchronised passes) and a G33.1 hole.
+    let lm = Machine::new("linuxcnc").unwrap();
+    let lprog = lm.parse(LINUXCNC_G76_G331).unwrap();
+    let probe = run_once(&lm, &lprog, &opts);
+    eprintln!(
+        "linuxcnc g76+g33.1: {} µs simulated, {} events, {} samples",
+        probe.last_t, probe.events, probe.samples
+    );
+    let mut g = c.benchmark_group("realtime_factor");
+    g.throughput(Throughput::Elements(probe.last_t));
+    g.bench_function("linuxcnc_g76_g33_1_1ms_samples", |b| b.iter(|| run_once(&lm, &lprog, &opts)));
+    g.finish();
 }
 
 /// A GSK G92.3 program (examples/gsk_g92_3.nc): seed 002's words, then a taper pass set.
 const GSK_G923: &str = "G98;\nG0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\n\
 G92.3 X36 Z-10 R-1 F3 D-0.05 E0.5 Q0.5 A1;\nG0 X60;\nM05;\nM30;\n";
+
+/// A LinuxCNC program: the G76 of LinuxCNC's tests/interp/g76/g76only.ngc, then a G33.1 hole.
+const LINUXCNC_G76_G331: &str = "G20 G18 S800 M3\nG0 Z.2 X.2\nG76 P.05 Z-.5 I-.075 J.008 K.045 H3 R2.0 Q29.5 E.05 L2\nG0 X0 Z.1\nG33.1 Z-.5 K.05\nM5 M2\n";
 
 criterion_group!(engine, benches);
 criterion_main!(engine);

@@ -90,11 +90,34 @@ pub enum AlarmKind {
     /// NC-1120: an alarm recorded on a real control (`nc-conform check`) whose vendor code the
     /// engine does not know; the engine never raises it. Its detail is `<vendor code>: <text>`.
     UnknownVendorAlarm,
+    /// NC-1090: `linuxcnc`: the interpreter refused a line (expression, parameter, o-word, word or
+    /// mode error); the particulars are LinuxCNC's own text.
+    LcncInterpreter,
+    /// NC-1091: `linuxcnc`: a feed move or canned cycle with F0 ("Cannot feed with zero feed rate").
+    LcncFeedZero,
+    /// NC-1092: `linuxcnc`: the R plane is below the hole bottom ("R less than z in cycle in xy plane").
+    LcncRBelowBottom,
+    /// NC-1093: `linuxcnc`: a new canned cycle without R ("R clearance plane unspecified in cycle").
+    LcncRUnspecified,
+    /// NC-1094: `linuxcnc`: L0 in a canned cycle ("Cannot do zero repeats of cycle").
+    LcncZeroRepeats,
+    /// NC-1095: `linuxcnc`: the spindle is stopped or turns the wrong way for the cycle ("Spindle not
+    /// turning in G84").
+    LcncSpindle,
+    /// NC-1096: `linuxcnc`: a word the cycle needs is missing ("Dwell time p word missing with g88",
+    /// "K word missing with g33/g33.1").
+    LcncWordMissing,
+    /// NC-1097: `linuxcnc` G33.1: the tap, following the reversing spindle, reached 10 pitches past
+    /// the end point.
+    LcncTapOvershoot,
+    /// NC-1098: `linuxcnc`: one block (an o-word loop or call) ran more lines or planned more steps
+    /// than the engine's limit.
+    LcncLoopLimit,
 }
 
 impl AlarmKind {
     /// Every alarm kind, in declaration order.
-    pub const ALL: [AlarmKind; 40] = [
+    pub const ALL: [AlarmKind; 49] = [
         AlarmKind::ImproperGCode,
         AlarmKind::FeedZero,
         AlarmKind::IllegalSCode,
@@ -135,6 +158,15 @@ impl AlarmKind {
         AlarmKind::LeadChangeOutOfRange,
         AlarmKind::FaceThread,
         AlarmKind::UnknownVendorAlarm,
+        AlarmKind::LcncInterpreter,
+        AlarmKind::LcncFeedZero,
+        AlarmKind::LcncRBelowBottom,
+        AlarmKind::LcncRUnspecified,
+        AlarmKind::LcncZeroRepeats,
+        AlarmKind::LcncSpindle,
+        AlarmKind::LcncWordMissing,
+        AlarmKind::LcncTapOvershoot,
+        AlarmKind::LcncLoopLimit,
     ];
 
     /// The alarm number as the trace writes it.
@@ -181,6 +213,15 @@ impl AlarmKind {
             LeadChangeOutOfRange => "NC-1064",
             FaceThread => "NC-1065",
             UnknownVendorAlarm => "NC-1120",
+            LcncInterpreter => "NC-1090",
+            LcncFeedZero => "NC-1091",
+            LcncRBelowBottom => "NC-1092",
+            LcncRUnspecified => "NC-1093",
+            LcncZeroRepeats => "NC-1094",
+            LcncSpindle => "NC-1095",
+            LcncWordMissing => "NC-1096",
+            LcncTapOvershoot => "NC-1097",
+            LcncLoopLimit => "NC-1098",
         }
     }
 
@@ -228,6 +269,15 @@ impl AlarmKind {
             LeadChangeOutOfRange => "LEAD CHANGE D OUT OF RANGE",
             FaceThread => "FACE THREAD NOT ALLOWED",
             UnknownVendorAlarm => "VENDOR ALARM UNKNOWN TO THE REFERENCE",
+            LcncInterpreter => "LINUXCNC INTERPRETER ERROR",
+            LcncFeedZero => "CANNOT FEED WITH ZERO FEED RATE",
+            LcncRBelowBottom => "R LESS THAN BOTTOM IN CYCLE",
+            LcncRUnspecified => "R CLEARANCE PLANE UNSPECIFIED IN CYCLE",
+            LcncZeroRepeats => "CANNOT DO ZERO REPEATS OF CYCLE",
+            LcncSpindle => "SPINDLE NOT TURNING AS THE CYCLE NEEDS",
+            LcncWordMissing => "WORD MISSING WITH CYCLE",
+            LcncTapOvershoot => "RIGID TAP OVERSHOOT BEYOND 10 PITCHES",
+            LcncLoopLimit => "PROGRAM LOOP LIMIT",
         }
     }
 }

@@ -145,3 +145,35 @@ fn toyoda_sample_stops_on_its_post_bug_and_its_rigid_taps_run() {
     let rigid_strokes = t.edges(nc_engine::trace::Signal::Rgspp).filter(|e| e.1).count();
     assert!(rigid_strokes >= 2, "G84.2 holes tapped rigidly: {rigid_strokes}");
 }
+
+/// LCNC-LEX-01..04: every LinuxCNC program of the corpus runs to its end under `linuxcnc`, except
+/// the two subroutine libraries, which stop where LinuxCNC stops them when run on their own: at
+/// their last line, without M2 ("File ended with no percent sign or program end").
+#[test]
+fn linuxcnc_programs_run_to_the_end() {
+    let libraries = ["LinuxCNC__linuxcnc__g76diam.ngc", "85vmh__mindovercnclathe__v-threading.ngc"];
+    let m = Machine::new("linuxcnc").unwrap();
+    let ours = corpus().into_iter().filter(|(n, _)| {
+        n.starts_with("LinuxCNC__")
+            || n.starts_with("HakanBastedt__")
+            || n.starts_with("85vmh__")
+            || n.starts_with("cbruiz__")
+    });
+    let mut count = 0;
+    for (name, text) in ours {
+        count += 1;
+        let p = m.parse(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let t = m.run_to_trace(&p, &opts());
+        let alarms: Vec<String> = t.alarms().map(|(_, a)| a.message()).collect();
+        if libraries.contains(&name.as_str()) {
+            let last = text.lines().count() as u32;
+            assert_eq!(alarms.len(), 1, "{name}: {alarms:?}");
+            let a = t.alarms().next().unwrap().1;
+            assert_eq!((a.kind.code(), a.line), ("NC-1090", Some(last)), "{name}");
+            assert!(alarms[0].contains("File ended with no percent sign or program end"), "{name}");
+        } else {
+            assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd, "{name}: {alarms:?}");
+        }
+    }
+    assert_eq!(count, 14);
+}

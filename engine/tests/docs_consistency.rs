@@ -21,11 +21,11 @@ fn read_dir_text(dir: &Path, ext: &str) -> Vec<(PathBuf, String)> {
     out
 }
 
-/// Rule ids like `GSK-RT-07` in a text (families COM, GSK, FAN, KND).
+/// Rule ids like `GSK-RT-07` in a text (families COM, GSK, FAN, KND, LCNC).
 fn rule_ids(text: &str) -> BTreeSet<String> {
     let mut ids = BTreeSet::new();
     let b = text.as_bytes();
-    for fam in ["COM-", "GSK-", "FAN-", "KND-"] {
+    for fam in ["COM-", "GSK-", "FAN-", "KND-", "LCNC-"] {
         let mut from = 0;
         while let Some(i) = text[from..].find(fam) {
             let start = from + i;
@@ -122,6 +122,15 @@ fn every_alarm_is_documented() {
         TapOvershoot,
         ZeroSpeedNotReported,
         UnknownVendorAlarm,
+        LcncInterpreter,
+        LcncFeedZero,
+        LcncRBelowBottom,
+        LcncRUnspecified,
+        LcncZeroRepeats,
+        LcncSpindle,
+        LcncWordMissing,
+        LcncTapOvershoot,
+        LcncLoopLimit,
     ];
     for k in all {
         assert!(

@@ -9,6 +9,7 @@ pub mod common;
 pub mod fanuc_mill;
 pub mod gsk_lathe;
 pub mod knd_lathe;
+pub mod linuxcnc;
 
 use crate::alarm::Alarm;
 use crate::exec::PlantConfig;
@@ -31,6 +32,11 @@ pub trait Dialect: Sync + std::fmt::Debug {
     fn plant_config(&self, params: &Params) -> PlantConfig;
     /// A fresh interpreter in the power-on state.
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter>;
+    /// Parses a program: the shared letter-address lexer with [`Dialect::lex_rules`], unless the
+    /// dialect has a program language of its own (`linuxcnc`: expressions, o-words).
+    fn parse(&self, text: &str) -> Result<crate::parse::Program, crate::parse::ParseError> {
+        crate::parse::parse(text, self.lex_rules())
+    }
 }
 
 /// Keeps the modal state of one run and turns blocks into steps.
@@ -52,7 +58,8 @@ pub trait Interpreter {
 }
 
 /// Every dialect.
-pub static ALL: &[&dyn Dialect] = &[&gsk_lathe::GskLathe, &fanuc_mill::FanucMill, &knd_lathe::KndLathe];
+pub static ALL: &[&dyn Dialect] =
+    &[&gsk_lathe::GskLathe, &fanuc_mill::FanucMill, &knd_lathe::KndLathe, &linuxcnc::Linuxcnc];
 
 /// Looks a dialect up by name.
 pub fn by_name(name: &str) -> Option<&'static dyn Dialect> {

@@ -194,6 +194,7 @@ impl Exec<'_> {
             self.spindle_changed();
         }
         self.hold_suppressed = false;
+        self.override_locked = false;
         self.overload = None;
         self.interp.reset(self.cmd);
         self.set_phase(Phase::Idle);

@@ -90,6 +90,8 @@ pub(crate) struct Exec<'a> {
     next_input: usize,
     phase: Phase,
     hold_suppressed: bool,
+    /// Overrides held at 100 % by the program (`Step::OverrideLock`).
+    override_locked: bool,
     hold_pending: bool,
     single_block: bool,
     dry_run: bool,
@@ -160,6 +162,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         next_input: 0,
         phase: Phase::Idle,
         hold_suppressed: false,
+        override_locked: false,
         hold_pending: false,
         single_block: false,
         dry_run: false,

@@ -137,6 +137,7 @@ impl Exec<'_> {
                     self.hold_requested = true;
                 }
             }
+            Step::OverrideLock(b) => self.override_locked = b,
             Step::Overload(w) => {
                 self.overload = w;
                 self.over_since = None;
@@ -181,7 +182,7 @@ impl Exec<'_> {
             return None;
         }
         // In a tapping cycle (hold suppressed) feed override and dry run do not act (COM-MOT-07).
-        let tapping = self.hold_suppressed;
+        let tapping = self.hold_suppressed || self.override_locked;
         let ovr = if tapping { 100.0 } else { self.feed_override as f64 };
         let dry = self.dry_run && !tapping;
         let mut v = nm_per_min * ovr / 100.0;
@@ -392,7 +393,8 @@ impl Exec<'_> {
             _ => Signal::Mf,
         };
         let max = self.cfg.spindle_max_rpm as f64;
-        let speed = (self.s_cmd as f64 * self.spindle_override as f64 / 100.0).min(max);
+        let spindle_ovr = if self.override_locked { 100 } else { self.spindle_override };
+        let speed = (self.s_cmd as f64 * spindle_ovr as f64 / 100.0).min(max);
         let mut orient_fin = 0;
         match effect {
             SpindleEffect::None => {}
@@ -408,7 +410,7 @@ impl Exec<'_> {
                 self.s_cmd = s;
                 let (_, rpm) = self.spindle.at(now);
                 if rpm != 0.0 && !self.spindle.position_mode {
-                    let s = (s as f64 * self.spindle_override as f64 / 100.0).min(max);
+                    let s = (s as f64 * spindle_ovr as f64 / 100.0).min(max);
                     self.spindle.command(now, s * rpm.signum());
                 }
             }

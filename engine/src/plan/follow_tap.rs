@@ -71,6 +71,55 @@ pub fn follow_tap(c: &FollowTap, out: &mut Vec<Step>) {
     out.push(Step::HoldSuppress(false));
 }
 
+/// One LinuxCNC G33.1 hole (rules LCNC-G331-*): the tap follows the spindle in, the spindle is
+/// reversed at the end point and the tap follows it through the reversal (overshoot, at most
+/// `overshoot_max` past the end point), then back out to the start point, where the spindle takes
+/// its direction again. No zero-speed wait: LinuxCNC reverses without one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReversingTap {
+    /// Tap axis slot.
+    pub axis: usize,
+    /// Start point on the tap axis.
+    pub start: Nm,
+    /// End point on the tap axis.
+    pub end: Nm,
+    /// Lead, nm per revolution (> 0).
+    pub lead_nm: i64,
+    /// Commanded spindle speed, rpm.
+    pub rpm: u32,
+    /// The spindle's direction before the block (true: M03).
+    pub forward: bool,
+    /// Time the spindle takes to stop from `rpm` (its speed-mode ramp), µs.
+    pub brake_us: Micros,
+    /// How far past the end point the tap may follow the reversing spindle, nm.
+    pub overshoot_max: Nm,
+    /// Raised when the spindle does not turn for the cut.
+    pub not_turning: AlarmKind,
+    /// Raised when the overshoot reaches `overshoot_max`.
+    pub overshoot: AlarmKind,
+}
+
+/// Appends the steps of one G33.1 hole, from the start point back to it.
+pub fn reversing_tap(c: &ReversingTap, out: &mut Vec<Step>) {
+    let dir: Nm = if c.end >= c.start { 1 } else { -1 };
+    let follow = |target, kind, alarm| {
+        Step::Follow(Follow { axis: c.axis, target, lead_nm: c.lead_nm, backlash: false, kind, alarm })
+    };
+    out.push(Step::HoldSuppress(true));
+    out.push(Step::Phase(Phase::Cutting));
+    out.push(follow(c.end, FollowKind::Cut, c.not_turning));
+    out.push(follow(
+        c.end.saturating_add(dir * c.overshoot_max),
+        FollowKind::Brake { brake_us: c.brake_us },
+        c.overshoot,
+    ));
+    out.push(Step::Phase(Phase::Retract));
+    out.push(follow(c.start, FollowKind::Return { rpm: c.rpm, forward: !c.forward }, c.overshoot));
+    let (code, effect) = if c.forward { (3, SpindleEffect::Forward) } else { (4, SpindleEffect::Reverse) };
+    out.push(Step::Function { letter: 'M', code, effect });
+    out.push(Step::HoldSuppress(false));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,6 +8,7 @@ pub mod drill;
 pub mod follow_tap;
 pub mod rigid_tap;
 pub mod thread;
+pub mod thread_g76;
 
 use crate::alarm::{Alarm, AlarmKind};
 use crate::input::CurrentSource;
@@ -289,6 +290,9 @@ pub enum Step {
     /// The rest of a peck cycle, expanded into its steps when the executor reaches it (see
     /// [`More`]).
     More(Box<More>),
+    /// Feed and spindle overrides held at 100 % (true) or honoured again (false), feed hold
+    /// still honoured (LinuxCNC `DISABLE_FEED_OVERRIDE` / `DISABLE_SPEED_OVERRIDE` in G84/G74).
+    OverrideLock(bool),
 }
 
 /// Most pecks a cycle builder plans at once: a hole of more pecks ends its first chunk with a

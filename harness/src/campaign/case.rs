@@ -27,6 +27,8 @@ pub enum Cycle {
     KndG93,
     /// `gsk-lathe` G92.3: variable-lead threading passes locked to the spindle.
     GskG923,
+    /// `linuxcnc` G33.1: the tap follows the spindle in, through its reversal and back out.
+    LinuxcncG33_1,
 }
 
 impl Cycle {
@@ -37,6 +39,7 @@ impl Cycle {
             Cycle::FanucG84 => "fanuc-mill",
             Cycle::KndG93 => "knd-lathe",
             Cycle::GskG923 => "gsk-lathe",
+            Cycle::LinuxcncG33_1 => "linuxcnc",
         }
     }
 
@@ -416,6 +419,10 @@ impl Case {
                 ("003.RVDL", None, p.rtcrg as u8 as f64),
                 ("nc.backlash_mm", Some('Z'), backlash),
             ]);
+        } else if self.program.cycle == Cycle::LinuxcncG33_1 {
+            // LinuxCNC has no M29 handshake either; the reversal follows `nc.spindle_ramp_ms`.
+            v.retain(|(id, _, _)| !id.starts_with("plc.sppos") && !id.starts_with("plc.rgtap"));
+            v.push(("nc.backlash_mm", Some('Z'), backlash));
         } else {
             v.extend([
                 ("5261", None, rt_ramp),
@@ -488,8 +495,9 @@ impl Case {
         let backlash = (self.params.backlash % 51) as i64 * 1000;
         let valid_lead = !matches!(p.edge, Some(Edge::LeadMax | Edge::LeadBeyond | Edge::LeadZero));
         let overridden = self.inputs.iter().any(|i| matches!(i.action, Action::SpindleOverride(_)));
-        if matches!(p.cycle, Cycle::KndG93 | Cycle::GskG923) {
-            // G93 and G92.3 are no rigid tapping (no F76.3, no RGSPP/RGSPM strokes): the sync, hold and
+        if matches!(p.cycle, Cycle::KndG93 | Cycle::GskG923 | Cycle::LinuxcncG33_1) {
+            // G93, G92.3 and G33.1 are no GSK/Fanuc rigid tapping (no F76.3, no RGSPP/RGSPM
+            // strokes): the sync, hold and
             // pre-M29 invariants have nothing to look at; INV-09 finds its axis itself.
             return Context {
                 tap: None,

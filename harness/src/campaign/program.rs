@@ -42,6 +42,7 @@ impl Case {
             Cycle::FanucG84 => self.fanuc_program(&mut b),
             Cycle::KndG93 => self.knd_program(&mut b),
             Cycle::GskG923 => self.g923_program(&mut b),
+            Cycle::LinuxcncG33_1 => self.linuxcnc_program(&mut b),
         }
         (b.text, b.alarm)
     }
@@ -266,6 +267,36 @@ impl Case {
             Cancel::ProgramEnd => "",
         });
         b.line("M30;");
+    }
+
+    /// `linuxcnc` G33.1 (LCNC-G331-01): one or two holes, the spindle turning either way or not
+    /// at all ("Spindle not turning in G33.1", NC-1095).
+    fn linuxcnc_program(&self, b: &mut Blocks) {
+        let p = &self.program;
+        b.line("G21 G90 G94 G17");
+        if p.feed_move_before {
+            b.line("G1 X5. Z10. F800");
+        }
+        b.line("G0 X0 Y0 Z5.");
+        let before = p.spindle_before_rpm();
+        if before != 0 {
+            b.line(&format!("{} S{}", if before > 0 { "M3" } else { "M4" }, before.abs()));
+        }
+        let depth = p.depth_nm();
+        b.line(&format!("G33.1 Z{} K{}", mm(5_000_000 - depth), mm(p.lead_nm())));
+        if before == 0 {
+            b.alarm(AlarmKind::LcncSpindle);
+        }
+        if p.second_hole {
+            b.line("G0 X10.");
+            b.line(&format!("G33.1 Z{} K{}", mm(5_000_000 - depth / 2), mm(p.lead_nm())));
+        }
+        b.line(match p.cancel {
+            Cancel::G80 | Cancel::Rapid => "G0 Z10.",
+            Cancel::Feed => "G1 Z10. F500",
+            Cancel::ProgramEnd => "",
+        });
+        b.line("M2");
     }
 
     fn fanuc_program(&self, b: &mut Blocks) {

@@ -17,7 +17,8 @@ fn cycle() -> impl Strategy<Value = Cycle> {
         Just(Cycle::GskG88),
         Just(Cycle::FanucG84),
         Just(Cycle::KndG93),
-        Just(Cycle::GskG923)
+        Just(Cycle::GskG923),
+        Just(Cycle::LinuxcncG33_1)
     ]
 }
 

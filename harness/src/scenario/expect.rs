@@ -189,12 +189,12 @@ fn err_at(ctx: &Ctx, loc: Option<Span>, message: impl Into<String>, expected: &s
     }
 }
 
-/// A rule id: `^(COM|GSK|FAN|KND|LCN|HDH)-[A-Z][A-Z0-9]*-\d{2}$` (the area may hold digits after
+/// A rule id: `^(COM|GSK|FAN|KND|LCN|HDH|LCNC)-[A-Z][A-Z0-9]*-\d{2}$` (the area may hold digits after
 /// its first letter: `KND-G93-04`).
 fn rule_id(ctx: &Ctx, r: &Spanned<String>) -> Result<String, InputError> {
     let parts: Vec<&str> = r.value.splitn(3, '-').collect();
     let ok = parts.len() == 3
-        && ["COM", "GSK", "FAN", "KND", "LCN", "HDH"].contains(&parts[0])
+        && ["COM", "GSK", "FAN", "KND", "LCN", "HDH", "LCNC"].contains(&parts[0])
         && !parts[1].is_empty()
         && parts[1].as_bytes()[0].is_ascii_uppercase()
         && parts[1].bytes().all(|b| b.is_ascii_uppercase() || b.is_ascii_digit())
@@ -206,7 +206,7 @@ fn rule_id(ctx: &Ctx, r: &Spanned<String>) -> Result<String, InputError> {
         Err(ctx.err(
             r,
             format!("`{}` is not a rule id", r.value),
-            "PREFIX-AREA-NN: PREFIX one of COM GSK FAN KND LCN HDH, AREA capital letters (then digits too), NN two digits (GSK-RT-07, KND-G93-04)",
+            "PREFIX-AREA-NN: PREFIX one of COM GSK FAN KND LCN HDH LCNC, AREA capital letters (then digits too), NN two digits (GSK-RT-07, KND-G93-04)",
         ))
     }
 }

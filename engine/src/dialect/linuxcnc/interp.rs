@@ -1,0 +1,391 @@
+//! The LinuxCNC interpreter's program flow (rules LCNC-LEX-02..04): each block
+//! is parsed again from its text, its expressions evaluated against the parameter store and the
+//! machine's position, and run by [`Machine`]. O-word structures are gathered from their first
+//! line to their end line and run as one when the end is read (their steps belong to the block of
+//! the end line; alarms keep the line of the statement that raised them). `sub` ... `endsub`
+//! defines a subroutine, `call` runs it with `#1..#30` set from its arguments; `if`/`elseif`/
+//! `else`, `while`, `do`/`while`, `repeat`, `break`, `continue`, `return`. A block may run at
+//! most [`MAX_LINES`] statements and plan [`MAX_STEPS`] steps (an endless `while` ends in
+//! NC-1098, never in a hang).
+
+use std::collections::BTreeMap;
+
+use super::eval::{param_index, Store};
+use super::machine::{alarm, Eb, Machine};
+use super::ngc::{parse_line, Ctrl, Line, Target};
+use super::END_OF_FILE;
+use crate::alarm::{Alarm, AlarmKind};
+use crate::dialect::Interpreter;
+use crate::params::Params;
+use crate::parse::Block;
+use crate::plan::{Pos, Step};
+use crate::units::Nm;
+
+/// Most statements one block may run (loops and calls included).
+pub const MAX_LINES: u64 = 1_000_000;
+/// Most steps one block may plan.
+pub const MAX_STEPS: usize = 2_000_000;
+/// Deepest subroutine nesting (LinuxCNC: "Too many subroutine levels").
+const MAX_DEPTH: usize = 10;
+
+/// How a run of statements ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Flow {
+    Normal,
+    Break,
+    Continue,
+    Return,
+    End,
+}
+
+/// A structure being gathered at the top level.
+#[derive(Debug)]
+struct Gather {
+    label: String,
+    lines: Vec<Line>,
+}
+
+/// The `linuxcnc` interpreter.
+#[derive(Debug)]
+pub struct LcncInterp {
+    m: Machine,
+    store: Store,
+    subs: BTreeMap<String, Vec<Line>>,
+    gather: Option<Gather>,
+    depth: usize,
+    budget: u64,
+}
+
+impl LcncInterp {
+    /// Power-on state.
+    pub fn new(p: &Params) -> Self {
+        LcncInterp {
+            m: Machine::new(p),
+            store: Store::new(),
+            subs: BTreeMap::new(),
+            gather: None,
+            depth: 0,
+            budget: 0,
+        }
+    }
+
+    fn err(line: u32, text: impl Into<String>) -> Alarm {
+        alarm(AlarmKind::LcncInterpreter, text, line, None)
+    }
+
+    /// Runs statements in order; structures are found by their labels.
+    fn run_lines(&mut self, lines: &[Line], out: &mut Vec<Step>) -> Result<Flow, Alarm> {
+        let mut i = 0;
+        while i < lines.len() {
+            let l = &lines[i];
+            self.tick(l.line, out)?;
+            let Some(o) = &l.oword else {
+                self.plain(l, out)?;
+                if self.m.ended {
+                    return Ok(Flow::End);
+                }
+                i += 1;
+                continue;
+            };
+            let end_of = |pred: &dyn Fn(&Ctrl) -> bool| {
+                lines[i + 1..]
+                    .iter()
+                    .position(|x| x.oword.as_ref().is_some_and(|p| p.label == o.label && pred(&p.ctrl)))
+                    .map(|k| i + 1 + k)
+                    .ok_or_else(|| Self::err(l.line, format!("o{} has no matching end", o.label)))
+            };
+            match &o.ctrl {
+                Ctrl::Sub => {
+                    let end = end_of(&|c| matches!(c, Ctrl::EndSub))?;
+                    self.subs.insert(o.label.clone(), lines[i + 1..end].to_vec());
+                    i = end + 1;
+                }
+                Ctrl::If(_) => {
+                    let end = end_of(&|c| matches!(c, Ctrl::EndIf))?;
+                    let flow = self.run_if(&lines[i..=end], out)?;
+                    if flow != Flow::Normal {
+                        return Ok(flow);
+                    }
+                    i = end + 1;
+                }
+                Ctrl::While(cond) => {
+                    let end = end_of(&|c| matches!(c, Ctrl::EndWhile))?;
+                    while self.truth(cond, l.line)? {
+                        self.tick(l.line, out)?;
+                        match self.run_lines(&lines[i + 1..end], out)? {
+                            Flow::Break => break,
+                            Flow::Normal | Flow::Continue => {}
+                            f => return Ok(f),
+                        }
+                    }
+                    i = end + 1;
+                }
+                Ctrl::Do => {
+                    let end = end_of(&|c| matches!(c, Ctrl::While(_)))?;
+                    let Some(Ctrl::While(cond)) = lines[end].oword.as_ref().map(|o| &o.ctrl) else {
+                        return Err(Self::err(l.line, "do without while"));
+                    };
+                    loop {
+                        self.tick(l.line, out)?;
+                        match self.run_lines(&lines[i + 1..end], out)? {
+                            Flow::Break => break,
+                            Flow::Normal | Flow::Continue => {}
+                            f => return Ok(f),
+                        }
+                        if !self.truth(cond, lines[end].line)? {
+                            break;
+                        }
+                    }
+                    i = end + 1;
+                }
+                Ctrl::Repeat(n) => {
+                    let end = end_of(&|c| matches!(c, Ctrl::EndRepeat))?;
+                    let n = self.value(n, l.line)?.max(0.0).round() as u64;
+                    for _ in 0..n {
+                        self.tick(l.line, out)?;
+                        match self.run_lines(&lines[i + 1..end], out)? {
+                            Flow::Break => break,
+                            Flow::Normal | Flow::Continue => {}
+                            f => return Ok(f),
+                        }
+                    }
+                    i = end + 1;
+                }
+                Ctrl::Break => return Ok(Flow::Break),
+                Ctrl::Continue => return Ok(Flow::Continue),
+                Ctrl::Return | Ctrl::EndSub => {
+                    if self.depth == 0 {
+                        return Err(Self::err(l.line, "Return outside of subroutine"));
+                    }
+                    return Ok(Flow::Return);
+                }
+                Ctrl::Call(args) => {
+                    if self.call(&o.label, args, l.line, out)? == Flow::End {
+                        return Ok(Flow::End);
+                    }
+                    i += 1;
+                }
+                Ctrl::ElseIf(_) | Ctrl::Else | Ctrl::EndIf | Ctrl::EndWhile | Ctrl::EndRepeat => {
+                    return Err(Self::err(
+                        l.line,
+                        format!("o{}: end of a structure that was not started", o.label),
+                    ));
+                }
+            }
+        }
+        Ok(Flow::Normal)
+    }
+
+    /// Counts one statement or loop turn against the block's budget (NC-1098 beyond it).
+    fn tick(&mut self, line: u32, out: &[Step]) -> Result<(), Alarm> {
+        self.budget += 1;
+        if self.budget > MAX_LINES || out.len() > MAX_STEPS {
+            return Err(alarm(
+                AlarmKind::LcncLoopLimit,
+                format!("more than {MAX_LINES} statements or {MAX_STEPS} steps in one block"),
+                line,
+                None,
+            ));
+        }
+        Ok(())
+    }
+
+    /// `if` … `elseif` … `else` … `endif` (the slice ends at `endif`).
+    fn run_if(&mut self, lines: &[Line], out: &mut Vec<Step>) -> Result<Flow, Alarm> {
+        let label = lines[0].oword.as_ref().map(|o| o.label.clone()).unwrap_or_default();
+        let heads: Vec<usize> =
+            (0..lines.len()).filter(|&k| lines[k].oword.as_ref().is_some_and(|o| o.label == label)).collect();
+        for w in heads.windows(2) {
+            let (h, next) = (w[0], w[1]);
+            let taken = match &lines[h].oword.as_ref().map(|o| &o.ctrl) {
+                Some(Ctrl::If(c)) | Some(Ctrl::ElseIf(c)) => self.truth(c, lines[h].line)?,
+                Some(Ctrl::Else) => true,
+                _ => false,
+            };
+            if taken {
+                return self.run_lines(&lines[h + 1..next], out);
+            }
+        }
+        Ok(Flow::Normal)
+    }
+
+    fn call(
+        &mut self,
+        label: &str,
+        args: &[super::ngc::Expr],
+        line: u32,
+        out: &mut Vec<Step>,
+    ) -> Result<Flow, Alarm> {
+        let Some(body) = self.subs.get(label).cloned() else {
+            let text =
+                if label.starts_with('<') { "Named oword not defined" } else { "Unknown oword number" };
+            return Err(Self::err(line, format!("{text}: o{label}")));
+        };
+        if self.depth >= MAX_DEPTH {
+            return Err(Self::err(line, "Too many subroutine levels"));
+        }
+        let values = args.iter().map(|a| self.value(a, line)).collect::<Result<Vec<f64>, Alarm>>()?;
+        let saved = self.store.enter(&values);
+        self.depth += 1;
+        let flow = self.run_lines(&body, out);
+        self.depth -= 1;
+        self.store.leave(&saved);
+        match flow? {
+            Flow::End => Ok(Flow::End),
+            Flow::Break | Flow::Continue => Err(Self::err(line, "break or continue outside a loop")),
+            _ => Ok(Flow::Normal),
+        }
+    }
+
+    fn value(&self, e: &super::ngc::Expr, line: u32) -> Result<f64, Alarm> {
+        self.store.eval(e, &self.m.system()).map_err(|t| Self::err(line, t))
+    }
+
+    fn truth(&self, e: &super::ngc::Expr, line: u32) -> Result<bool, Alarm> {
+        Ok(self.value(e, line)? != 0.0)
+    }
+
+    /// A line of words and parameter settings.
+    fn plain(&mut self, l: &Line, out: &mut Vec<Step>) -> Result<(), Alarm> {
+        let sys = self.m.system();
+        let mut eb = Eb::new(l.line);
+        for w in &l.words {
+            let v = self
+                .store
+                .eval(&w.value, &sys)
+                .map_err(|t| alarm(AlarmKind::LcncInterpreter, t, l.line, Some(w.col)))?;
+            eb.push(w.letter, v, w.col)
+                .map_err(|t| alarm(AlarmKind::LcncInterpreter, t, l.line, Some(w.col)))?;
+        }
+        // Settings take effect after the whole line is read (RS274NGC), before it runs.
+        let mut sets = Vec::with_capacity(l.sets.len());
+        for (t, e) in &l.sets {
+            let v = self.value(e, l.line)?;
+            sets.push((t, v));
+        }
+        for (t, v) in sets {
+            match t {
+                Target::Named(n) => self.store.write_named(n, v).map_err(|e| Self::err(l.line, e))?,
+                Target::Num(i) => {
+                    let n = param_index(self.value(i, l.line)?).map_err(|e| Self::err(l.line, e))?;
+                    self.store.write_num(n, v);
+                }
+            }
+        }
+        self.m.run(&eb, out)
+    }
+}
+
+impl Interpreter for LcncInterp {
+    fn block(&mut self, block: &Block, out: &mut Vec<Step>) -> Result<(), Alarm> {
+        self.budget = 0;
+        if block.text == END_OF_FILE {
+            return Err(Self::err(block.line, "File ended with no percent sign or program end"));
+        }
+        let line = parse_line(&block.text, block.line)
+            .map_err(|e| Self::err(e.line, e.message).at(e.line, Some(e.col)))?;
+        if let Some(g) = &mut self.gather {
+            let closes = line.oword.as_ref().is_some_and(|o| {
+                o.label == g.label
+                    && matches!(
+                        o.ctrl,
+                        Ctrl::EndSub | Ctrl::EndIf | Ctrl::EndWhile | Ctrl::EndRepeat | Ctrl::While(_)
+                    )
+            });
+            let is_do = g.lines[0].oword.as_ref().is_some_and(|o| matches!(o.ctrl, Ctrl::Do));
+            let is_while = g.lines[0].oword.as_ref().is_some_and(|o| matches!(o.ctrl, Ctrl::While(_)));
+            // A `while` closes a `do`; `endwhile` closes a `while`.
+            let closes = closes
+                && !(is_while && line.oword.as_ref().is_some_and(|o| matches!(o.ctrl, Ctrl::While(_))))
+                && !(is_do && line.oword.as_ref().is_some_and(|o| matches!(o.ctrl, Ctrl::EndWhile)));
+            g.lines.push(line);
+            if !closes {
+                return Ok(());
+            }
+            let lines = std::mem::take(&mut g.lines);
+            self.gather = None;
+            return self.run_lines(&lines, out).map(|_| ());
+        }
+        if let Some(o) = &line.oword {
+            if matches!(o.ctrl, Ctrl::Sub | Ctrl::If(_) | Ctrl::While(_) | Ctrl::Do | Ctrl::Repeat(_)) {
+                self.gather = Some(Gather { label: o.label.clone(), lines: vec![line] });
+                return Ok(());
+            }
+        }
+        self.run_lines(std::slice::from_ref(&line), out).map(|_| ())
+    }
+
+    fn reset(&mut self, pos: Pos) {
+        self.m.reset(pos);
+        self.gather = None;
+        self.depth = 0;
+    }
+
+    fn set_position(&mut self, pos: Pos) {
+        self.m.pos = pos;
+    }
+
+    fn modal(&self) -> Vec<String> {
+        self.m.modal()
+    }
+
+    fn rigid_mode(&self) -> bool {
+        false
+    }
+
+    fn set_params(&mut self, params: &Params) {
+        self.m.cfg = super::machine::Cfg::from(params);
+    }
+}
+
+/// G2/G3 (LCNC-MOD-02): centre by I/J/K offsets (absolute under G90.1) or by radius R, in the
+/// selected plane; under G7 the offsets are radii.
+pub fn arc(m: &mut Machine, b: &Eb, cw: bool, out: &mut Vec<Step>) -> Result<(), Alarm> {
+    let bad = |t: &str| alarm(AlarmKind::LcncInterpreter, t, b.line, None);
+    let t = m.target(b)?;
+    let (ia, ib, _) = m.plane.axes();
+    let s = [m.work(0), m.work(1), m.work(2)];
+    let (sa, sb, ea, eb) = (s[ia] as f64, s[ib] as f64, t[ia] as f64, t[ib] as f64);
+    let offset_letter = |a: usize| ['I', 'J', 'K'][a];
+    let centre = if let Some(r) = b.get('R') {
+        if b.get(offset_letter(ia)).is_some() || b.get(offset_letter(ib)).is_some() {
+            return Err(bad("Mixed radius ijk format for arc"));
+        }
+        let r = m.len(r, 2, b, 'R')? as f64;
+        let (dx, dy) = (ea - sa, eb - sb);
+        let chord = dx.hypot(dy);
+        if chord == 0.0 {
+            return Err(bad("Current point same as end point of arc"));
+        }
+        let half = chord / 2.0;
+        if r.abs() < half - 1000.0 {
+            return Err(bad("Arc radius too small to reach end point"));
+        }
+        let d = (r * r - half * half).max(0.0).sqrt();
+        let sign = if cw { 1.0 } else { -1.0 } * r.signum();
+        [sa + dx / 2.0 + dy / chord * d * sign, sb + dy / 2.0 - dx / chord * d * sign]
+    } else {
+        let (oa, ob) = (b.get(offset_letter(ia)), b.get(offset_letter(ib)));
+        if oa.is_none() && ob.is_none() {
+            return Err(bad("R i j k words all missing for arc"));
+        }
+        let conv =
+            |v: Option<f64>, l| v.map(|v| m.len(v, 2, b, l)).transpose().map(|o| o.unwrap_or(0) as f64);
+        let (oa, ob) = (conv(oa, offset_letter(ia))?, conv(ob, offset_letter(ib))?);
+        let c = if m.arc_absolute { [oa, ob] } else { [sa + oa, sb + ob] };
+        let r0 = (sa - c[0]).hypot(sb - c[1]);
+        let r1 = (ea - c[0]).hypot(eb - c[1]);
+        if (r0 - r1).abs() > (0.0005 * 25_400_000.0f64).max(r0 * 0.001) {
+            return Err(bad("Radius to end of arc differs from radius to start"));
+        }
+        c
+    };
+    let target = m.machine(t);
+    let center: [Nm; 2] = [
+        (centre[0].round() as Nm).saturating_add(m.off[ia]),
+        (centre[1].round() as Nm).saturating_add(m.off[ib]),
+    ];
+    out.push(Step::Arc { target, center, plane: m.plane, clockwise: cw, feed: m.feed_rate() });
+    m.pos = target;
+    Ok(())
+}
