@@ -79,7 +79,7 @@ impl Machine {
 
     /// Parses a program under this machine's dialect.
     pub fn parse(&self, text: &str) -> Result<Program, ParseError> {
-        parse::parse(text, self.dialect.lex_rules())
+        self.dialect.parse(text)
     }
 
     /// Runs a parsed program, streaming the trace into `sink`.

@@ -8,12 +8,13 @@
 pub mod common;
 pub mod fanuc_mill;
 pub mod gsk_lathe;
+pub mod heidenhain;
 pub mod knd_lathe;
 
 use crate::alarm::Alarm;
 use crate::exec::PlantConfig;
 use crate::params::{ParamDef, Params};
-use crate::parse::{Block, LexRules};
+use crate::parse::{Block, LexRules, ParseError, Program};
 use crate::plan::{Pos, Step};
 use crate::trace::AxisSpec;
 
@@ -31,6 +32,11 @@ pub trait Dialect: Sync + std::fmt::Debug {
     fn plant_config(&self, params: &Params) -> PlantConfig;
     /// A fresh interpreter in the power-on state.
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter>;
+    /// Parses a program of this dialect: letter-address G-code under [`Dialect::lex_rules`]
+    /// unless the dialect has its own program format (Heidenhain Klartext).
+    fn parse(&self, text: &str) -> Result<Program, ParseError> {
+        crate::parse::parse(text, self.lex_rules())
+    }
 }
 
 /// Keeps the modal state of one run and turns blocks into steps.
@@ -52,7 +58,8 @@ pub trait Interpreter {
 }
 
 /// Every dialect.
-pub static ALL: &[&dyn Dialect] = &[&gsk_lathe::GskLathe, &fanuc_mill::FanucMill, &knd_lathe::KndLathe];
+pub static ALL: &[&dyn Dialect] =
+    &[&gsk_lathe::GskLathe, &fanuc_mill::FanucMill, &knd_lathe::KndLathe, &heidenhain::Heidenhain];
 
 /// Looks a dialect up by name.
 pub fn by_name(name: &str) -> Option<&'static dyn Dialect> {

@@ -14,6 +14,7 @@ mod plc;
 pub mod profile;
 pub mod spindle;
 mod steps;
+mod thread;
 mod triggers;
 
 pub use config::{PlantConfig, PlcConfig};

@@ -7,6 +7,7 @@
 pub mod drill;
 pub mod follow_tap;
 pub mod rigid_tap;
+pub mod thread;
 
 use crate::alarm::{Alarm, AlarmKind};
 use crate::input::CurrentSource;
@@ -236,6 +237,9 @@ pub enum Step {
     /// The rest of a peck cycle, expanded into its steps when the executor reaches it (see
     /// [`More`]).
     More(Box<More>),
+    /// A thread cutting pass synchronised with the spindle in speed mode: see
+    /// [`thread::ThreadPass`].
+    Thread(thread::ThreadPass),
 }
 
 /// Most pecks a cycle builder plans at once: a hole of more pecks ends its first chunk with a
@@ -262,6 +266,13 @@ pub enum More {
         /// Depth below R reached so far, nm.
         reached: Nm,
     },
+    /// Thread cutting passes (Heidenhain cycle 832).
+    Thread {
+        /// The cycle.
+        cycle: thread::ThreadCycle,
+        /// Index of the next pass.
+        next: u64,
+    },
 }
 
 impl More {
@@ -270,6 +281,7 @@ impl More {
         match self {
             More::RigidTap { cycle, reached } => rigid_tap::pecks(cycle, *reached, out),
             More::Drill { cycle, reached } => drill::pecks(cycle, *reached, out),
+            More::Thread { cycle, next } => thread::passes(cycle, *next, out),
         }
     }
 }
