@@ -85,6 +85,19 @@ fn benches(c: &mut Criterion) {
         b.iter_batched(|| (), |_| run_once(&fm, &fprog, &fopts), BatchSize::SmallInput)
     });
     g.finish();
+
+    // heidenhain: the seed-004 cycle 832 example (Klartext, taper thread, 2 starts x 8 passes).
+    let hm = Machine::new("heidenhain").unwrap();
+    let hprog = hm.parse(include_str!("../../examples/heidenhain_832_seed.h")).unwrap();
+    let probe = run_once(&hm, &hprog, &opts);
+    eprintln!(
+        "heidenhain 832: {} µs simulated, {} events, {} samples",
+        probe.last_t, probe.events, probe.samples
+    );
+    let mut g = c.benchmark_group("realtime_factor");
+    g.throughput(Throughput::Elements(probe.last_t));
+    g.bench_function("heidenhain_832_seed_1ms_samples", |b| b.iter(|| run_once(&hm, &hprog, &opts)));
+    g.finish();
 }
 
 criterion_group!(engine, benches);
