@@ -14,7 +14,7 @@ mod plc;
 pub mod profile;
 pub mod spindle;
 mod steps;
-mod thread;
+mod thread_832;
 mod triggers;
 
 pub use config::{PlantConfig, PlcConfig};

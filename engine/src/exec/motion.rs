@@ -60,7 +60,7 @@ pub enum Path {
     },
     /// A thread pass: the profile is the travel along the pitch axis; the infeed axis is a
     /// function of that travel through the knots (the spindle turns on its own in speed mode).
-    Thread {
+    ThreadPass {
         /// Travel profile along the pitch axis, nm.
         profile: Profile,
         /// Pitch axis slot.
@@ -106,7 +106,7 @@ impl Motion {
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
             | Path::Tap { profile, .. }
-            | Path::Thread { profile, .. } => profile.total,
+            | Path::ThreadPass { profile, .. } => profile.total,
         }
     }
 
@@ -143,7 +143,7 @@ impl Motion {
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
             | Path::Tap { profile, .. }
-            | Path::Thread { profile, .. } => profile.eval(dt).1,
+            | Path::ThreadPass { profile, .. } => profile.eval(dt).1,
         }
     }
 
@@ -161,7 +161,7 @@ impl Motion {
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
             | Path::Tap { profile, .. }
-            | Path::Thread { profile, .. } => *profile = profile.stop_from(dt, a, period),
+            | Path::ThreadPass { profile, .. } => *profile = profile.stop_from(dt, a, period),
         }
         // Re-anchor: the new profiles start at `t` and measure from the old start.
         self.t0 += elapsed;
@@ -207,7 +207,7 @@ impl Motion {
                 let s = (profile.eval(dt).0 - backlash).max(0.0);
                 p[*axis] = m.start[*axis] + (d.signum() as f64 * s).round() as Nm;
             }
-            Path::Thread { profile, along, across, knots, n, dir } => {
+            Path::ThreadPass { profile, along, across, knots, n, dir } => {
                 let s = profile.eval(dt).0;
                 p[*along] = m.start[*along] + (dir * s).round() as Nm;
                 p[*across] = across_at(&knots[..*n], s).round() as Nm;

@@ -109,7 +109,7 @@ impl Exec<'_> {
             }
             Step::Tap(t) => self.start_tap(t),
             Step::Follow(f) => self.start_follow(f),
-            Step::Thread(p) => self.start_thread(p),
+            Step::ThreadPass(p) => self.start_thread_pass(p),
             Step::AwaitSignal { signal, value, timeout_us, alarm } => {
                 self.start_await(signal, value, timeout_us, alarm)
             }

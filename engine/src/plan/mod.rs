@@ -7,7 +7,7 @@
 pub mod drill;
 pub mod follow_tap;
 pub mod rigid_tap;
-pub mod thread;
+pub mod thread_832;
 
 use crate::alarm::{Alarm, AlarmKind};
 use crate::input::CurrentSource;
@@ -238,8 +238,8 @@ pub enum Step {
     /// [`More`]).
     More(Box<More>),
     /// A thread cutting pass synchronised with the spindle in speed mode: see
-    /// [`thread::ThreadPass`].
-    Thread(thread::ThreadPass),
+    /// [`thread_832::ThreadPass`].
+    ThreadPass(thread_832::ThreadPass),
 }
 
 /// Most pecks a cycle builder plans at once: a hole of more pecks ends its first chunk with a
@@ -267,9 +267,9 @@ pub enum More {
         reached: Nm,
     },
     /// Thread cutting passes (Heidenhain cycle 832).
-    Thread {
+    Thread832 {
         /// The cycle.
-        cycle: thread::ThreadCycle,
+        cycle: thread_832::ThreadCycle,
         /// Index of the next pass.
         next: u64,
     },
@@ -281,7 +281,7 @@ impl More {
         match self {
             More::RigidTap { cycle, reached } => rigid_tap::pecks(cycle, *reached, out),
             More::Drill { cycle, reached } => drill::pecks(cycle, *reached, out),
-            More::Thread { cycle, next } => thread::passes(cycle, *next, out),
+            More::Thread832 { cycle, next } => thread_832::passes(cycle, *next, out),
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::alarm::{Alarm, AlarmKind};
 use crate::parse::klartext::{KValue, QParam, Q832};
-use crate::plan::thread::ThreadCycle;
+use crate::plan::thread_832::ThreadCycle;
 use crate::plan::Pos;
 use crate::units::{Nm, NM_PER_MM};
 

@@ -8,7 +8,7 @@ use crate::dialect::Interpreter;
 use crate::params::Params;
 use crate::parse::klartext::{KCoord, KFeed, KValue, Klartext};
 use crate::parse::Block;
-use crate::plan::thread::thread_cycle;
+use crate::plan::thread_832::thread_cycle;
 use crate::plan::{Feed, Pos, SpindleEffect, Step};
 use crate::trace::AXES;
 use crate::units::{Nm, NM_PER_MM};

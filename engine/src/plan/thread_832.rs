@@ -212,7 +212,7 @@ pub fn passes(c: &ThreadCycle, next: u64, out: &mut Vec<Step>) {
         out.push(Step::Rapid { target: c.pos(a0, c0) });
         out.push(Step::Phase(Phase::Cutting));
         out.push(Step::HoldSuppress(true));
-        out.push(Step::Thread(p));
+        out.push(Step::ThreadPass(p));
         out.push(Step::Phase(Phase::Retract));
         let lifted = c.line(a1) + out_c * c.clearance;
         if lifted != c1 {
@@ -226,7 +226,7 @@ pub fn passes(c: &ThreadCycle, next: u64, out: &mut Vec<Step>) {
         }
     }
     if end < total {
-        out.push(Step::More(Box::new(More::Thread { cycle: *c, next: end })));
+        out.push(Step::More(Box::new(More::Thread832 { cycle: *c, next: end })));
         return;
     }
     // Rapid back to the cycle's start point (HDH-C832-11).
@@ -292,7 +292,7 @@ mod tests {
         let passes: Vec<ThreadPass> = steps
             .iter()
             .filter_map(|s| match s {
-                Step::Thread(p) => Some(*p),
+                Step::ThreadPass(p) => Some(*p),
                 _ => None,
             })
             .collect();

@@ -1,4 +1,4 @@
-//! A thread pass (`Step::Thread`): the CNC waits for the spindle, turning in speed mode, to reach
+//! A thread pass (`Step::ThreadPass`): the CNC waits for the spindle, turning in speed mode, to reach
 //! the pass' start angle, then the pitch axis follows it at lead × its speed (one profile,
 //! cruising at exactly that speed) and the infeed axis follows the pitch axis through the pass'
 //! knots. Feed override and dry run do not act.
@@ -10,13 +10,13 @@ use super::motion::Path;
 use super::profile::Profile;
 use super::{Active, Exec};
 use crate::alarm::{Alarm, AlarmKind};
-use crate::plan::thread::ThreadPass;
+use crate::plan::thread_832::ThreadPass;
 use crate::plan::Step;
 use crate::units::{ceil_to, Micros};
 
 impl Exec<'_> {
     /// Starts a thread pass, or waits first (for the spindle's ramp to end, for the start angle).
-    pub(super) fn start_thread(&mut self, p: ThreadPass) {
+    pub(super) fn start_thread_pass(&mut self, p: ThreadPass) {
         let now = self.now;
         let (angle, rpm) = self.spindle_at(now);
         if rpm == 0.0 || self.spindle.stalled {
@@ -25,7 +25,7 @@ impl Exec<'_> {
         }
         // A thread is cut at a steady speed: wait for the end of a speed change.
         if self.spindle.ramp(now).is_some() {
-            self.steps.push_front(Step::Thread(p));
+            self.steps.push_front(Step::ThreadPass(p));
             self.active = Active::Until(ceil_to(self.spindle.ramp_end().max(now + 1), self.cfg.period_us));
             return;
         }
@@ -67,7 +67,7 @@ impl Exec<'_> {
             let delta = if rpm > 0.0 { target - angle } else { angle - target }.rem_euclid(360.0);
             let dt = (delta / (rpm.abs() * 6e-6)).round() as Micros;
             if dt > 0 {
-                self.steps.push_front(Step::Thread(ThreadPass { armed: true, ..p }));
+                self.steps.push_front(Step::ThreadPass(ThreadPass { armed: true, ..p }));
                 self.active = Active::Until(now + dt);
                 return;
             }
@@ -95,7 +95,7 @@ impl Exec<'_> {
         }
         self.start_motion(
             target,
-            Path::Thread { profile, along: p.along, across: p.across, knots, n: p.n, dir },
+            Path::ThreadPass { profile, along: p.along, across: p.across, knots, n: p.n, dir },
         );
         if let Some(m) = &mut self.motion {
             // The spindle is in speed mode: machine lock holds the axes, not the spindle.
