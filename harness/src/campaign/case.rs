@@ -25,6 +25,8 @@ pub enum Cycle {
     FanucG84,
     /// `knd-lathe` G93: the tap follows the spindle encoder, brakes past the end point, returns.
     KndG93,
+    /// `heidenhain` cycle 832 THREAD EXTENDED (Klartext): thread passes following the spindle.
+    Heidenhain832,
 }
 
 impl Cycle {
@@ -34,6 +36,7 @@ impl Cycle {
             Cycle::GskG84 | Cycle::GskG88 => "gsk-lathe",
             Cycle::FanucG84 => "fanuc-mill",
             Cycle::KndG93 => "knd-lathe",
+            Cycle::Heidenhain832 => "heidenhain",
         }
     }
 
@@ -405,6 +408,13 @@ impl Case {
                 ("003.RVDL", None, p.rtcrg as u8 as f64),
                 ("nc.backlash_mm", Some('Z'), backlash),
             ]);
+        } else if self.program.cycle == Cycle::Heidenhain832 {
+            // Cycle 832 has no M29 handshake either; the negative-diameter check may be off.
+            v.retain(|(id, _, _)| !id.starts_with("plc.sppos") && !id.starts_with("plc.rgtap"));
+            v.extend([
+                ("hei.neg_diameter_alarm", None, p.rtcrg as u8 as f64),
+                ("nc.backlash_mm", Some('Z'), backlash),
+            ]);
         } else {
             v.extend([
                 ("5261", None, rt_ramp),
@@ -477,8 +487,8 @@ impl Case {
         let backlash = (self.params.backlash % 51) as i64 * 1000;
         let valid_lead = !matches!(p.edge, Some(Edge::LeadMax | Edge::LeadBeyond | Edge::LeadZero));
         let overridden = self.inputs.iter().any(|i| matches!(i.action, Action::SpindleOverride(_)));
-        if p.cycle == Cycle::KndG93 {
-            // G93 is no rigid tapping (no F76.3, no RGSPP/RGSPM strokes): the sync, hold and
+        if matches!(p.cycle, Cycle::KndG93 | Cycle::Heidenhain832) {
+            // G93 and cycle 832 are no rigid tapping (no F76.3, no RGSPP/RGSPM strokes): the sync, hold and
             // pre-M29 invariants have nothing to look at; INV-09 finds its axis itself.
             return Context {
                 tap: None,

@@ -12,7 +12,13 @@ use super::case::{
 };
 
 fn cycle() -> impl Strategy<Value = Cycle> {
-    prop_oneof![Just(Cycle::GskG84), Just(Cycle::GskG88), Just(Cycle::FanucG84), Just(Cycle::KndG93)]
+    prop_oneof![
+        Just(Cycle::GskG84),
+        Just(Cycle::GskG88),
+        Just(Cycle::FanucG84),
+        Just(Cycle::KndG93),
+        Just(Cycle::Heidenhain832)
+    ]
 }
 
 fn peck() -> impl Strategy<Value = Peck> {
