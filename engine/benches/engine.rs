@@ -108,6 +108,19 @@ fn benches(c: &mut Criterion) {
     g.throughput(Throughput::Elements(probe.last_t));
     g.bench_function("linuxcnc_g76_g33_1_1ms_samples", |b| b.iter(|| run_once(&lm, &lprog, &opts)));
     g.finish();
+
+    // heidenhain: the seed-004 cycle 832 example (Klartext, taper thread, 2 starts x 8 passes).
+    let hm = Machine::new("heidenhain").unwrap();
+    let hprog = hm.parse(include_str!("../../examples/heidenhain_832_seed.h")).unwrap();
+    let probe = run_once(&hm, &hprog, &opts);
+    eprintln!(
+        "heidenhain 832: {} µs simulated, {} events, {} samples",
+        probe.last_t, probe.events, probe.samples
+    );
+    let mut g = c.benchmark_group("realtime_factor");
+    g.throughput(Throughput::Elements(probe.last_t));
+    g.bench_function("heidenhain_832_seed_1ms_samples", |b| b.iter(|| run_once(&hm, &hprog, &opts)));
+    g.finish();
 }
 
 /// A GSK G92.3 program (examples/gsk_g92_3.nc): seed 002's words, then a taper pass set.

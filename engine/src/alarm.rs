@@ -113,11 +113,29 @@ pub enum AlarmKind {
     /// NC-1098: `linuxcnc`: one block (an o-word loop or call) ran more lines or planned more steps
     /// than the engine's limit.
     LcncLoopLimit,
+    /// NC-1070: `heidenhain`: a cycle parameter (`Q…`) is outside the range of its input (seed 004).
+    QParamOutOfRange,
+    /// NC-1071: `heidenhain`: a turning cycle is called outside `FUNCTION MODE TURN`.
+    TurningModeRequired,
+    /// NC-1072: `heidenhain`: `CYCL CALL` with no cycle defined before it.
+    CycleNotDefined,
+    /// NC-1073: `heidenhain` cycle 832: the taper dimensions give no thread (no length along the pitch, a taper angle that fixes no point, a point out of range).
+    ThreadContourUndefined,
+    /// NC-1074: `heidenhain` cycle 832: the infeed angle Q467 is larger than the thread's flank angle (seed 004 caution).
+    InfeedAboveFlank,
+    /// NC-1075: `heidenhain` cycle 832: the tool stands at a negative diameter when the cycle is called, which reverses Q471 (seed 004 caution).
+    NegativeDiameterPreposition,
+    /// NC-1076: `heidenhain` cycle 832: infeed type Q468 = 0 (constant chip section) with infeed angle Q467 = 0.
+    ChipSectionNeedsAngle,
+    /// NC-1077: A thread pass's feed (pitch x spindle speed) is above the maximum cutting feed.
+    ThreadFeedTooHigh,
+    /// NC-1078: A thread pass's approach (Q465) or overrun (Q466) path is shorter than the feed axis needs to reach or leave the thread feed.
+    ThreadPathTooShort,
 }
 
 impl AlarmKind {
     /// Every alarm kind, in declaration order.
-    pub const ALL: [AlarmKind; 49] = [
+    pub const ALL: [AlarmKind; 58] = [
         AlarmKind::ImproperGCode,
         AlarmKind::FeedZero,
         AlarmKind::IllegalSCode,
@@ -167,6 +185,15 @@ impl AlarmKind {
         AlarmKind::LcncWordMissing,
         AlarmKind::LcncTapOvershoot,
         AlarmKind::LcncLoopLimit,
+        AlarmKind::QParamOutOfRange,
+        AlarmKind::TurningModeRequired,
+        AlarmKind::CycleNotDefined,
+        AlarmKind::ThreadContourUndefined,
+        AlarmKind::InfeedAboveFlank,
+        AlarmKind::NegativeDiameterPreposition,
+        AlarmKind::ChipSectionNeedsAngle,
+        AlarmKind::ThreadFeedTooHigh,
+        AlarmKind::ThreadPathTooShort,
     ];
 
     /// The alarm number as the trace writes it.
@@ -222,6 +249,15 @@ impl AlarmKind {
             LcncWordMissing => "NC-1096",
             LcncTapOvershoot => "NC-1097",
             LcncLoopLimit => "NC-1098",
+            QParamOutOfRange => "NC-1070",
+            TurningModeRequired => "NC-1071",
+            CycleNotDefined => "NC-1072",
+            ThreadContourUndefined => "NC-1073",
+            InfeedAboveFlank => "NC-1074",
+            NegativeDiameterPreposition => "NC-1075",
+            ChipSectionNeedsAngle => "NC-1076",
+            ThreadFeedTooHigh => "NC-1077",
+            ThreadPathTooShort => "NC-1078",
         }
     }
 
@@ -278,6 +314,15 @@ impl AlarmKind {
             LcncWordMissing => "WORD MISSING WITH CYCLE",
             LcncTapOvershoot => "RIGID TAP OVERSHOOT BEYOND 10 PITCHES",
             LcncLoopLimit => "PROGRAM LOOP LIMIT",
+            QParamOutOfRange => "CYCLE PARAMETER OUT OF RANGE",
+            TurningModeRequired => "CYCLE NEEDS TURNING MODE",
+            CycleNotDefined => "CYCL CALL WITHOUT CYCLE DEFINITION",
+            ThreadContourUndefined => "THREAD CONTOUR UNDEFINED",
+            InfeedAboveFlank => "INFEED ANGLE ABOVE FLANK ANGLE",
+            NegativeDiameterPreposition => "NEGATIVE DIAMETER PRE-POSITION",
+            ChipSectionNeedsAngle => "CONSTANT CHIP SECTION NEEDS INFEED ANGLE",
+            ThreadFeedTooHigh => "THREAD FEED ABOVE MAXIMUM",
+            ThreadPathTooShort => "APPROACH OR OVERRUN PATH TOO SHORT",
         }
     }
 }

@@ -21,11 +21,11 @@ fn read_dir_text(dir: &Path, ext: &str) -> Vec<(PathBuf, String)> {
     out
 }
 
-/// Rule ids like `GSK-RT-07` in a text (families COM, GSK, FAN, KND, LCNC).
+/// Rule ids like `GSK-RT-07` in a text (families COM, GSK, FAN, KND, LCNC, HDH).
 fn rule_ids(text: &str) -> BTreeSet<String> {
     let mut ids = BTreeSet::new();
     let b = text.as_bytes();
-    for fam in ["COM-", "GSK-", "FAN-", "KND-", "LCNC-"] {
+    for fam in ["COM-", "GSK-", "FAN-", "KND-", "LCNC-", "HDH-"] {
         let mut from = 0;
         while let Some(i) = text[from..].find(fam) {
             let start = from + i;
@@ -59,7 +59,8 @@ fn every_rule_id_cited_by_a_test_is_defined() {
     for dir in ["engine/tests", "engine/src", "harness"] {
         for (p, text) in read_dir_text(&root().join(dir), "rs") {
             for id in rule_ids(&text) {
-                if !defined.contains(&id) {
+                // The scenario parser's own test of the id syntax cites a made-up id.
+                if !defined.contains(&id) && id != "HDH-ABC-99" {
                     missing.push(format!("{} cites {id}", p.display()));
                 }
             }
@@ -131,6 +132,15 @@ fn every_alarm_is_documented() {
         LcncWordMissing,
         LcncTapOvershoot,
         LcncLoopLimit,
+        QParamOutOfRange,
+        TurningModeRequired,
+        CycleNotDefined,
+        ThreadContourUndefined,
+        InfeedAboveFlank,
+        NegativeDiameterPreposition,
+        ChipSectionNeedsAngle,
+        ThreadFeedTooHigh,
+        ThreadPathTooShort,
     ];
     for k in all {
         assert!(

@@ -79,3 +79,16 @@ fn the_flag_keeps_the_usual_exit_status_and_output() {
     assert_eq!(plain.status.code(), checked.status.code());
     assert_eq!(plain.stdout, checked.stdout, "the first run's trace is written as usual");
 }
+
+#[test]
+fn every_klartext_example_is_deterministic() {
+    let mut programs = Vec::new();
+    files(&root().join("examples"), &["h"], &mut programs);
+    assert!(!programs.is_empty());
+    for p in &programs {
+        let p = p.to_string_lossy();
+        let (code, err) =
+            check(&["run", &p, "--dialect", "heidenhain", "--check-determinism", "--out", "/dev/null"]);
+        assert_eq!(code, 0, "{p}: {err}");
+    }
+}

@@ -116,6 +116,7 @@ pub fn parse(text: &str) -> Result<Program, ParseError> {
                 seq: None,
                 block_delete: parsed.block_delete,
                 words: Vec::new(),
+                klartext: None,
             });
         }
     }
@@ -136,6 +137,7 @@ pub fn parse(text: &str) -> Result<Program, ParseError> {
         seq: None,
         block_delete: false,
         words: Vec::new(),
+        klartext: None,
     });
     Ok(Program { blocks })
 }

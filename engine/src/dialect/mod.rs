@@ -8,13 +8,14 @@
 pub mod common;
 pub mod fanuc_mill;
 pub mod gsk_lathe;
+pub mod heidenhain;
 pub mod knd_lathe;
 pub mod linuxcnc;
 
 use crate::alarm::Alarm;
 use crate::exec::PlantConfig;
 use crate::params::{ParamDef, Params};
-use crate::parse::{Block, LexRules};
+use crate::parse::{Block, LexRules, ParseError, Program};
 use crate::plan::{Pos, Step};
 use crate::trace::AxisSpec;
 
@@ -33,8 +34,9 @@ pub trait Dialect: Sync + std::fmt::Debug {
     /// A fresh interpreter in the power-on state.
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter>;
     /// Parses a program: the shared letter-address lexer with [`Dialect::lex_rules`], unless the
-    /// dialect has a program language of its own (`linuxcnc`: expressions, o-words).
-    fn parse(&self, text: &str) -> Result<crate::parse::Program, crate::parse::ParseError> {
+    /// dialect has a program language of its own (`linuxcnc`: expressions, o-words; `heidenhain`:
+    /// Klartext).
+    fn parse(&self, text: &str) -> Result<Program, ParseError> {
         crate::parse::parse(text, self.lex_rules())
     }
 }
@@ -58,8 +60,13 @@ pub trait Interpreter {
 }
 
 /// Every dialect.
-pub static ALL: &[&dyn Dialect] =
-    &[&gsk_lathe::GskLathe, &fanuc_mill::FanucMill, &knd_lathe::KndLathe, &linuxcnc::Linuxcnc];
+pub static ALL: &[&dyn Dialect] = &[
+    &gsk_lathe::GskLathe,
+    &fanuc_mill::FanucMill,
+    &knd_lathe::KndLathe,
+    &linuxcnc::Linuxcnc,
+    &heidenhain::Heidenhain,
+];
 
 /// Looks a dialect up by name.
 pub fn by_name(name: &str) -> Option<&'static dyn Dialect> {

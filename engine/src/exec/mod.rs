@@ -15,6 +15,7 @@ pub mod profile;
 pub mod spindle;
 mod steps;
 mod thread;
+mod thread_832;
 mod triggers;
 
 pub use config::{PlantConfig, PlcConfig};

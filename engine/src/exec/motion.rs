@@ -58,6 +58,22 @@ pub enum Path {
         /// Spindle direction, +1 forward.
         spin: f64,
     },
+    /// A thread pass: the profile is the travel along the pitch axis; the infeed axis is a
+    /// function of that travel through the knots (the spindle turns on its own in speed mode).
+    ThreadPass {
+        /// Travel profile along the pitch axis, nm.
+        profile: Profile,
+        /// Pitch axis slot.
+        along: usize,
+        /// Infeed axis slot.
+        across: usize,
+        /// (travel from the start, infeed position) of each knot, nm.
+        knots: [(f64, f64); 4],
+        /// Knots used.
+        n: usize,
+        /// Direction of the travel on the pitch axis, ±1.
+        dir: f64,
+    },
     /// A thread pass locked to a spindle turning at a steady speed in speed mode: the long axis
     /// travels `lead·n + dlead·n²/2` after `n` revolutions; every axis moves along the line to
     /// the end (run-out taken off), the run-out axis adds its run-out over the last part.
@@ -131,9 +147,10 @@ impl Motion {
     pub fn duration(&self) -> Micros {
         match &self.path {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.total).max().unwrap_or(0),
-            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
-                profile.total
-            }
+            Path::Line { profile, .. }
+            | Path::Arc { profile, .. }
+            | Path::Tap { profile, .. }
+            | Path::ThreadPass { profile, .. } => profile.total,
             Path::Thread { total, .. } => *total,
         }
     }
@@ -168,9 +185,10 @@ impl Motion {
         let dt = t.saturating_sub(self.t0);
         match &self.path {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.eval(dt).1).fold(0.0, f64::max),
-            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
-                profile.eval(dt).1
-            }
+            Path::Line { profile, .. }
+            | Path::Arc { profile, .. }
+            | Path::Tap { profile, .. }
+            | Path::ThreadPass { profile, .. } => profile.eval(dt).1,
             Path::Thread { rev_us, n0, lead, dlead, .. } => {
                 let n = n0 + rev_us * dt as f64;
                 rev_us * (lead + dlead * n)
@@ -200,9 +218,10 @@ impl Motion {
                     *p = p.stop_from(dt, a, period);
                 }
             }
-            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
-                *profile = profile.stop_from(dt, a, period);
-            }
+            Path::Line { profile, .. }
+            | Path::Arc { profile, .. }
+            | Path::Tap { profile, .. }
+            | Path::ThreadPass { profile, .. } => *profile = profile.stop_from(dt, a, period),
             Path::Thread { .. } => {}
         }
         // Re-anchor: the new profiles start at `t` and measure from the old start.
@@ -266,9 +285,28 @@ impl Motion {
                     p[*axis] += (amount * g).round() as Nm;
                 }
             }
+            Path::ThreadPass { profile, along, across, knots, n, dir } => {
+                let s = profile.eval(dt).0;
+                p[*along] = m.start[*along] + (dir * s).round() as Nm;
+                p[*across] = across_at(&knots[..*n], s).round() as Nm;
+            }
         }
         p
     }
+}
+
+/// The infeed position at `s` along a thread pass: linear between knots, constant beyond.
+fn across_at(knots: &[(f64, f64)], s: f64) -> f64 {
+    let Some(&(_, mut c)) = knots.first() else { return 0.0 };
+    for w in knots.windows(2) {
+        let ((s0, c0), (s1, c1)) = (w[0], w[1]);
+        if s >= s1 {
+            c = c1;
+        } else if s > s0 && s1 > s0 {
+            return c0 + (c1 - c0) * (s - s0) / (s1 - s0);
+        }
+    }
+    c
 }
 
 #[cfg(test)]

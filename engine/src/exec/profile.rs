@@ -67,6 +67,33 @@ impl Profile {
         Profile { pieces, n: 3, dist, total }
     }
 
+    /// A thread pass of `dist` nm (HDH-C832-05): accelerate at `a` nm/µs² to exactly `v` nm/µs,
+    /// cruise at exactly `v` (the pitch stays exact: no stretching), decelerate; the motion
+    /// starts `t0` µs after a tick and ends on a tick of `period`: the cruise gives up half the
+    /// rounding and the deceleration takes it, so the distance is kept. A move too short to
+    /// cruise that long is an ordinary [`Profile::trapezoid`].
+    pub fn thread(dist: f64, v: f64, a: f64, period: Micros, t0: Micros) -> Profile {
+        let period = period.max(1);
+        if dist <= 0.0 || v <= 0.0 || !v.is_finite() || !(a > 0.0 && a.is_finite()) {
+            return Profile::trapezoid(dist, v, a, period);
+        }
+        let ta = v / a;
+        let tc = (dist - v * ta) / v;
+        let ideal = 2.0 * ta + tc;
+        let end = ceil_to(t0 + (ideal.ceil() as Micros).max(1), period);
+        let total = end - t0;
+        let extra = total as f64 - ideal;
+        if tc < extra || tc < 0.0 {
+            return Profile::trapezoid(dist, v, a, period);
+        }
+        let (tc, td) = (tc - extra, ta + 2.0 * extra);
+        let mut pieces = [NO_PIECE; MAX_PIECES];
+        pieces[0] = Piece { t0: 0.0, s0: 0.0, v0: 0.0, a };
+        pieces[1] = Piece { t0: ta, s0: 0.5 * v * ta, v0: v, a: 0.0 };
+        pieces[2] = Piece { t0: ta + tc, s0: 0.5 * v * ta + v * tc, v0: v, a: -v / td };
+        Profile { pieces, n: 3, dist, total }
+    }
+
     /// A motion that does not move.
     pub fn still() -> Profile {
         Profile { pieces: [NO_PIECE; MAX_PIECES], n: 1, dist: 0.0, total: 0 }
@@ -169,6 +196,22 @@ mod tests {
         assert!(q.dist > s && q.dist <= p.dist);
         assert!((q.total as f64) >= v / 1e-5);
         assert_eq!(q.eval(0).0, s);
+    }
+
+    #[test]
+    fn a_thread_pass_cruises_at_exactly_its_speed_and_ends_on_a_tick() {
+        // 40 mm at 1000 mm/min (1/60 nm/µs... in nm/µs: 16.67) with 1000 mm/s² (1e-3 nm/µs²).
+        let v = 1e9 / 60e6;
+        for t0 in [0, 1, 333, 999] {
+            let p = Profile::thread(40e6, v, 1e-3, 1000, t0);
+            assert_eq!((t0 + p.total) % 1000, 0, "{t0}");
+            assert_eq!(p.eval(p.total).0, 40e6);
+            // Cruise: s = v·t − v²/(2a), exactly.
+            let t = 1_000_000;
+            let (s, sp) = p.eval(t);
+            assert_eq!(sp, v);
+            assert!((s - (v * t as f64 - v * v / 2e-3)).abs() < 1e-6, "{s}");
+        }
     }
 
     #[test]

@@ -119,6 +119,7 @@ impl Exec<'_> {
                 }
             }
             Step::Follow(f) => self.start_follow(f),
+            Step::ThreadPass(p) => self.start_thread_pass(p),
             Step::AwaitSignal { signal, value, timeout_us, alarm } => {
                 self.start_await(signal, value, timeout_us, alarm)
             }

@@ -205,7 +205,7 @@ fn lex_line(line: &str, line_no: u32, rules: &LexRules) -> Result<Option<Block>,
     if words.is_empty() {
         return Ok(None);
     }
-    Ok(Some(Block { line: line_no, text: line.trim().to_string(), seq, block_delete, words }))
+    Ok(Some(Block { line: line_no, text: line.trim().to_string(), seq, block_delete, words, klartext: None }))
 }
 
 /// The message for a character that cannot appear between words.

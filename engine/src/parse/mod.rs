@@ -3,7 +3,10 @@
 //! Owns the lexical layer only: program framing (`%`, `O` numbers), sequence numbers, comments,
 //! block delete, words and their exact decimal values, and which letters a dialect accepts
 //! ([`LexRules`]). It knows nothing of what a word means: the dialect's interpreter does.
+//! Heidenhain Klartext, line and keyword based, has its own parser ([`klartext`]) with the same
+//! [`ParseError`] and the same "never panics" rule.
 
+pub mod klartext;
 mod lexer;
 
 pub use lexer::parse;
@@ -42,6 +45,8 @@ pub struct Block {
     pub block_delete: bool,
     /// The words in the order written (the `N` word is not repeated here).
     pub words: Vec<Word>,
+    /// A Klartext block (dialect `heidenhain`); `None` for letter-address blocks.
+    pub klartext: Option<Box<klartext::Klartext>>,
 }
 
 /// One address word: a letter and its value.

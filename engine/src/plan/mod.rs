@@ -8,6 +8,7 @@ pub mod drill;
 pub mod follow_tap;
 pub mod rigid_tap;
 pub mod thread;
+pub mod thread_832;
 pub mod thread_g76;
 
 use crate::alarm::{Alarm, AlarmKind};
@@ -293,6 +294,9 @@ pub enum Step {
     /// Feed and spindle overrides held at 100 % (true) or honoured again (false), feed hold
     /// still honoured (LinuxCNC `DISABLE_FEED_OVERRIDE` / `DISABLE_SPEED_OVERRIDE` in G84/G74).
     OverrideLock(bool),
+    /// A thread cutting pass synchronised with the spindle in speed mode: see
+    /// [`thread_832::ThreadPass`].
+    ThreadPass(thread_832::ThreadPass),
 }
 
 /// Most pecks a cycle builder plans at once: a hole of more pecks ends its first chunk with a
@@ -326,6 +330,13 @@ pub enum More {
         /// The next pass to plan (0-based).
         next: u64,
     },
+    /// Thread cutting passes (Heidenhain cycle 832).
+    Thread832 {
+        /// The cycle.
+        cycle: thread_832::ThreadCycle,
+        /// Index of the next pass.
+        next: u64,
+    },
 }
 
 impl More {
@@ -335,6 +346,7 @@ impl More {
             More::RigidTap { cycle, reached } => rigid_tap::pecks(cycle, *reached, out),
             More::Drill { cycle, reached } => drill::pecks(cycle, *reached, out),
             More::Thread { cycle, next } => thread::passes(cycle, *next, out),
+            More::Thread832 { cycle, next } => thread_832::passes(cycle, *next, out),
         }
     }
 }

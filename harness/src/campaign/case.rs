@@ -29,6 +29,8 @@ pub enum Cycle {
     GskG923,
     /// `linuxcnc` G33.1: the tap follows the spindle in, through its reversal and back out.
     LinuxcncG33_1,
+    /// `heidenhain` cycle 832 THREAD EXTENDED (Klartext): thread passes following the spindle.
+    Heidenhain832,
 }
 
 impl Cycle {
@@ -40,6 +42,7 @@ impl Cycle {
             Cycle::KndG93 => "knd-lathe",
             Cycle::GskG923 => "gsk-lathe",
             Cycle::LinuxcncG33_1 => "linuxcnc",
+            Cycle::Heidenhain832 => "heidenhain",
         }
     }
 
@@ -423,6 +426,13 @@ impl Case {
             // LinuxCNC has no M29 handshake either; the reversal follows `nc.spindle_ramp_ms`.
             v.retain(|(id, _, _)| !id.starts_with("plc.sppos") && !id.starts_with("plc.rgtap"));
             v.push(("nc.backlash_mm", Some('Z'), backlash));
+        } else if self.program.cycle == Cycle::Heidenhain832 {
+            // Cycle 832 has no M29 handshake either; the negative-diameter check may be off.
+            v.retain(|(id, _, _)| !id.starts_with("plc.sppos") && !id.starts_with("plc.rgtap"));
+            v.extend([
+                ("hei.neg_diameter_alarm", None, p.rtcrg as u8 as f64),
+                ("nc.backlash_mm", Some('Z'), backlash),
+            ]);
         } else {
             v.extend([
                 ("5261", None, rt_ramp),
@@ -495,9 +505,9 @@ impl Case {
         let backlash = (self.params.backlash % 51) as i64 * 1000;
         let valid_lead = !matches!(p.edge, Some(Edge::LeadMax | Edge::LeadBeyond | Edge::LeadZero));
         let overridden = self.inputs.iter().any(|i| matches!(i.action, Action::SpindleOverride(_)));
-        if matches!(p.cycle, Cycle::KndG93 | Cycle::GskG923 | Cycle::LinuxcncG33_1) {
-            // G93, G92.3 and G33.1 are no GSK/Fanuc rigid tapping (no F76.3, no RGSPP/RGSPM
-            // strokes): the sync, hold and
+        if matches!(p.cycle, Cycle::KndG93 | Cycle::GskG923 | Cycle::LinuxcncG33_1 | Cycle::Heidenhain832) {
+            // G93, G92.3, G33.1 and cycle 832 are no GSK/Fanuc rigid tapping (no F76.3, no
+            // RGSPP/RGSPM strokes): the sync, hold and
             // pre-M29 invariants have nothing to look at; INV-09 finds its axis itself.
             return Context {
                 tap: None,

@@ -43,6 +43,7 @@ impl Case {
             Cycle::KndG93 => self.knd_program(&mut b),
             Cycle::GskG923 => self.g923_program(&mut b),
             Cycle::LinuxcncG33_1 => self.linuxcnc_program(&mut b),
+            Cycle::Heidenhain832 => self.heidenhain_program(&mut b),
         }
         (b.text, b.alarm)
     }
@@ -297,6 +298,83 @@ impl Case {
             Cancel::ProgramEnd => "",
         });
         b.line("M2");
+    }
+
+    /// Heidenhain cycle 832 (seed 004) in Klartext: a longitudinal or face thread (Q461 from
+    /// `per_revolution`), outside or inside (Q471 from `left_hand`), over the case's depth, lead
+    /// and speed (the thread feed kept within 3000 mm/min so that 2 mm of approach and overrun
+    /// suffice), constant chip section or depth (Q468 from the peck mode), 1..3 starts, 0..1 air
+    /// cuts, a run-out or not. Some edge words put one parameter out of its range (NC-1070 at
+    /// its line); without a spindle the call raises NC-1017.
+    fn heidenhain_program(&self, b: &mut Blocks) {
+        let p = &self.program;
+        b.line("0 BEGIN PGM CASE MM");
+        b.line("1 FUNCTION MODE TURN");
+        let lead = p.lead_nm();
+        let rpm = (p.speed_rpm() as i64).min(3_000 * 1_000_000 / lead).max(1);
+        b.line(&format!("2 TOOL CALL 1 Z S{rpm}"));
+        if p.feed_move_before {
+            b.line("3 L X+50 Z+10 F800");
+        }
+        let before = p.spindle_before_rpm();
+        let m = match before.signum() {
+            1 => " M303",
+            -1 => " M304",
+            _ => "",
+        };
+        b.line(&format!("4 L X+40 Z+5 R0 FMAX{m}"));
+        let depth = p.depth_nm();
+        let face = p.per_revolution;
+        let (x_end, z_end) = if face { (30_000_000 - 2 * depth, 0) } else { (30_000_000, -depth) };
+        let angle = 7.5 * (1 + p.dwell % 4) as f64;
+        let q: [(u16, String); 20] = [
+            (471, (p.left_hand as u8).to_string()),
+            (461, (face as u8).to_string()),
+            (460, "1".into()),
+            (472, mm(lead)),
+            (473, "0".into()),
+            (464, "0".into()),
+            (491, "30".into()),
+            (492, "0".into()),
+            (493, mm(x_end)),
+            (494, mm(z_end)),
+            (469, "0".into()),
+            (474, if p.m29_in_block { "0.5".into() } else { "0".into() }),
+            (465, "2".into()),
+            (466, "2".into()),
+            (463, mm(50_000 + (p.peck_depth % 40) as i64 * 50_000)),
+            (467, format!("{angle}")),
+            (468, ((p.peck == Peck::Deep) as u8).to_string()),
+            (470, (p.speed as u32 % 360).to_string()),
+            (475, p.repeats().to_string()),
+            (476, (p.clamp as u8).to_string()),
+        ];
+        let beyond = match p.edge {
+            Some(Edge::DwellBeyond) => Some((476, "256")),
+            Some(Edge::RepeatBeyond) => Some((475, "501")),
+            Some(Edge::RepeatZero) => Some((475, "0")),
+            Some(Edge::PeckBeyond) => Some((463, "0.0009")),
+            Some(Edge::RetractBeyond) => Some((465, "0.099")),
+            Some(Edge::LeadBeyond) => Some((472, "100000")),
+            _ => None,
+        };
+        b.line("5 CYCL DEF 832 THREAD EXTENDED");
+        for (n, v) in &q {
+            match beyond {
+                Some((bn, bv)) if bn == *n => {
+                    b.line(&format!("  Q{n}={bv}"));
+                    b.alarm(AlarmKind::QParamOutOfRange);
+                }
+                _ => b.line(&format!("  Q{n}={v}")),
+            }
+        }
+        b.line("6 CYCL CALL");
+        if before == 0 {
+            b.alarm(AlarmKind::SpindleNotTurning);
+        }
+        b.line("7 L X+60 Z+20 FMAX M305");
+        b.line("8 M30");
+        b.line("9 END PGM CASE MM");
     }
 
     fn fanuc_program(&self, b: &mut Blocks) {

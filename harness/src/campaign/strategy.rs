@@ -18,7 +18,8 @@ fn cycle() -> impl Strategy<Value = Cycle> {
         Just(Cycle::FanucG84),
         Just(Cycle::KndG93),
         Just(Cycle::GskG923),
-        Just(Cycle::LinuxcncG33_1)
+        Just(Cycle::LinuxcncG33_1),
+        Just(Cycle::Heidenhain832)
     ]
 }
 
