@@ -153,3 +153,24 @@ fn knd_g93_inputs_at_any_phase_end_the_run_and_keep_the_invariants() {
         }
     }
 }
+
+#[test]
+fn knd_g93_07_the_return_turns_at_s_times_the_spindle_override() {
+    // 300 rpm × 150 %: the return runs at -450 rpm, the cut before it at 300 (M03 came first).
+    let inputs = InputSchedule::default().when(
+        nc_engine::input::Condition::Phase(Phase::Cutting),
+        1,
+        0,
+        Input::SpindleOverride(150),
+    );
+    let t = run("knd-lathe", &[], G93, &sampled(inputs));
+    assert!(codes(&t).is_empty(), "{:?}", codes(&t));
+    let cut_max = t.samples().map(|(_, s)| s.spindle_mrpm).max().unwrap();
+    let ret_min = t.samples().map(|(_, s)| s.spindle_mrpm).min().unwrap();
+    assert_eq!(cut_max, 450_000, "the resumed M03 turns at 450 rpm too");
+    // The return's trapezoid is stretched to whole periods: its top speed is a hair below.
+    assert!((ret_min + 450_000).abs() < 500, "{ret_min}");
+    let plain = run("knd-lathe", &[], G93, &sampled(InputSchedule::default()));
+    let plain_min = plain.samples().map(|(_, s)| s.spindle_mrpm).min().unwrap();
+    assert!((plain_min + 300_000).abs() < 500, "{plain_min}");
+}

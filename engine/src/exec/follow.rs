@@ -85,7 +85,10 @@ impl Exec<'_> {
                 if d == 0 && b == 0.0 {
                     return;
                 }
-                let r = r.min(self.cfg.spindle_max_rpm).max(1) as f64;
+                // The reversed spindle turns at S × the spindle override in force (COM-MOT-06).
+                let r = (r as f64 * self.spindle_override as f64 / 100.0)
+                    .min(self.cfg.spindle_max_rpm as f64)
+                    .max(1.0);
                 let v = r * lead / 60e6;
                 let a_rpm = self.cfg.spindle_max_rpm.max(1) as f64 / self.cfg.spindle_ramp_us.max(1) as f64;
                 let profile = Profile::trapezoid(d.unsigned_abs() as f64 + b, v, a_rpm * lead / 60e6, period);

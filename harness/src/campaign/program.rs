@@ -177,20 +177,29 @@ impl Case {
         b.line("M30;");
     }
 
+    /// The start of a KND or GSK threading program: G98, the optional G01, the start point X40
+    /// Z5, the spindle before the cycle (turning at least at `min_rpm`; none when that is 0 and
+    /// the case has none). Returns the signed speed commanded.
+    fn lathe_start(&self, b: &mut Blocks, min_rpm: i64) -> i64 {
+        b.line("G98;");
+        if self.program.feed_move_before {
+            b.line("G1 X50. Z10. F800;");
+        }
+        b.line("G0 X40. Z5.;");
+        let before = self.program.spindle_before_rpm();
+        let rpm = if before < 0 { before.min(-min_rpm) } else { before.max(min_rpm) };
+        if rpm != 0 {
+            b.line(&format!("{} S{};", if rpm > 0 { "M03" } else { "M04" }, rpm.abs()));
+        }
+        rpm
+    }
+
     /// KND G93 (seed 001): the spindle turns before the cycle (else NC-1017, KND-G93-02); G93
     /// taps from Z5 to the depth; a second hole repeats the modal G93 with a new end point; a G00
     /// block leaves it. Edge words are not generated for this cycle.
     fn knd_program(&self, b: &mut Blocks) {
         let p = &self.program;
-        b.line("G98;");
-        if p.feed_move_before {
-            b.line("G1 X50. Z10. F800;");
-        }
-        b.line("G0 X40. Z5.;");
-        let before = p.spindle_before_rpm();
-        if before != 0 {
-            b.line(&format!("{} S{};", if before > 0 { "M03" } else { "M04" }, before.abs()));
-        }
+        let before = self.lathe_start(b, 0);
         let depth = p.depth_nm();
         b.line(&format!("G93 Z{} F{};", mm(5_000_000 - depth), mm(p.lead_nm())));
         if before == 0 {
@@ -213,15 +222,9 @@ impl Case {
     /// choice; the edges that apply to its words.
     fn g923_program(&self, b: &mut Blocks) {
         let p = &self.program;
-        b.line("G98;");
-        if p.feed_move_before {
-            b.line("G1 X50. Z10. F800;");
-        }
-        b.line("G0 X40. Z5.;");
-        let before = p.spindle_before_rpm();
-        // The thread follows the spindle: it always turns (a stopped one is NC-0011 after the
-        // X rapid, which is no range alarm).
-        b.line(&format!("{} S{};", if before < 0 { "M04" } else { "M03" }, before.abs().max(300)));
+        // The thread follows the spindle: it always turns (a stopped one is 0011 after the X
+        // rapid, which is no range alarm).
+        self.lathe_start(b, 300);
         let depth = p.depth_nm();
         let lead = p.lead_nm();
         let width = lead / 4;
