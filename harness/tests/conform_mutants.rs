@@ -246,6 +246,16 @@ fn zero_step_accepted(p: &str) -> String {
     })
 }
 
+/// G92.3: the threads per inch I read as a lead F in mm (no 25.4 / I).
+fn inch_count_as_lead(p: &str) -> String {
+    map_words(p, |c, n| Some(format!("{}{n}", if c == 'I' { 'F' } else { c })))
+}
+
+/// G92.3: the taper R is not read (a straight thread).
+fn no_taper(p: &str) -> String {
+    map_words(p, |c, n| (c != 'R').then(|| format!("{c}{n}")))
+}
+
 // ---------------------------------------------------------------------------------------------
 // The mutants
 
@@ -493,6 +503,18 @@ fn cases() -> Vec<Case> {
             name: "G92.3 single block ignored",
             defect: Defect::Deaf(|i| matches!(i, Input::SingleBlock(_))),
             scenarios: &["gsk/g92_3/single_block_every_pass"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 threads per inch I read as a lead in mm",
+            defect: Defect::Reads(inch_count_as_lead),
+            scenarios: &["gsk/g92_3/taper_inch_i", "gsk/g92_3/straight_inch_i_lead"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 taper R ignored (a straight thread)",
+            defect: Defect::Reads(no_taper),
+            scenarios: &["gsk/g92_3/taper_inch_i"],
             families: &["GSK-G923"],
         },
     ]
