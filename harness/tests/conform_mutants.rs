@@ -183,6 +183,79 @@ fn swap_return_levels(p: &str) -> String {
     p.replace("G98", "G9#").replace("G99", "G98").replace("G9#", "G99")
 }
 
+/// Rewrites every word (a letter and the number after it) through `f`; `None` drops the word.
+fn map_words(p: &str, mut f: impl FnMut(char, &str) -> Option<String>) -> String {
+    let mut out = String::with_capacity(p.len());
+    let mut chars = p.chars().peekable();
+    while let Some(c) = chars.next() {
+        if !c.is_ascii_alphabetic() {
+            out.push(c);
+            continue;
+        }
+        let mut number = String::new();
+        while let Some(&d) = chars.peek() {
+            if !(d.is_ascii_digit() || matches!(d, '.' | '-' | '+')) {
+                break;
+            }
+            number.push(d);
+            chars.next();
+        }
+        if let Some(w) = f(c.to_ascii_uppercase(), &number) {
+            out.push_str(&w);
+        }
+    }
+    out
+}
+
+/// G92.3: the lead change D is not read (a constant lead).
+fn no_lead_change(p: &str) -> String {
+    map_words(p, |c, n| (c != 'D').then(|| format!("{c}{n}")))
+}
+
+/// G92.3: the run-out words J and K are not read (no run-out).
+fn no_runout(p: &str) -> String {
+    map_words(p, |c, n| (!matches!(c, 'J' | 'K')).then(|| format!("{c}{n}")))
+}
+
+/// G92.3 cuts `(F − E − A) / Q` passes, without the `+ 1`: as if the tool were Q wider (the
+/// programs this runs on give A and Q with a decimal point, in the same block).
+fn one_pass_less(p: &str) -> String {
+    p.lines()
+        .map(|line| {
+            let mut q = 0.0;
+            map_words(line, |c, n| {
+                if c == 'Q' {
+                    q = n.parse().unwrap_or(0.0);
+                }
+                Some(String::new())
+            });
+            map_words(line, |c, n| match (c, n.parse::<f64>()) {
+                ('A', Ok(a)) => Some(format!("A{:.4}", a + q)),
+                _ => Some(format!("{c}{n}")),
+            })
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// G92.3: a zero axial step Q is not refused but taken as the largest (a single pass).
+fn zero_step_accepted(p: &str) -> String {
+    map_words(p, |c, n| match (c, n.parse::<f64>()) {
+        ('Q', Ok(0.0)) => Some("Q9999.".into()),
+        _ => Some(format!("{c}{n}")),
+    })
+}
+
+/// G92.3: the threads per inch I read as a lead F in mm (no 25.4 / I).
+fn inch_count_as_lead(p: &str) -> String {
+    map_words(p, |c, n| Some(format!("{}{n}", if c == 'I' { 'F' } else { c })))
+}
+
+/// G92.3: the taper R is not read (a straight thread).
+fn no_taper(p: &str) -> String {
+    map_words(p, |c, n| (c != 'R').then(|| format!("{c}{n}")))
+}
+
 // ---------------------------------------------------------------------------------------------
 // The mutants
 
@@ -389,6 +462,60 @@ fn cases() -> Vec<Case> {
             defect: Defect::Reports(no_phases),
             scenarios: &["common/trace/"],
             families: &["COM-TRACE"],
+        },
+        Case {
+            name: "G92.3 feed hold always finishes the pass (nc.thread_retract forced 0)",
+            defect: Defect::Force("gsk-lathe", &[("nc.thread_retract", None, 0.0)]),
+            scenarios: &["gsk/g92_3/feed_hold_thread_retract"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 feed hold always retracts (nc.thread_retract forced 1)",
+            defect: Defect::Force("gsk-lathe", &[("nc.thread_retract", None, 1.0)]),
+            scenarios: &["gsk/g92_3/feed_hold_finishes_the_pass"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 lead change D ignored (constant lead)",
+            defect: Defect::Reads(no_lead_change),
+            scenarios: &["gsk/g92_3/lead_shrinks_d_negative", "gsk/g92_3/seed_example"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 run-out J/K ignored",
+            defect: Defect::Reads(no_runout),
+            scenarios: &["gsk/g92_3/seed_example"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 pass count (F-E-A)/Q without the +1",
+            defect: Defect::Reads(one_pass_less),
+            scenarios: &["gsk/g92_3/pass_count_rounded_up", "gsk/g92_3/seed_example"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 Q0 accepted (NC-1063 never)",
+            defect: Defect::Reads(zero_step_accepted),
+            scenarios: &["gsk/g92_3/step_q_zero_nc1063"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 single block ignored",
+            defect: Defect::Deaf(|i| matches!(i, Input::SingleBlock(_))),
+            scenarios: &["gsk/g92_3/single_block_every_pass"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 threads per inch I read as a lead in mm",
+            defect: Defect::Reads(inch_count_as_lead),
+            scenarios: &["gsk/g92_3/taper_inch_i", "gsk/g92_3/straight_inch_i_lead"],
+            families: &["GSK-G923"],
+        },
+        Case {
+            name: "G92.3 taper R ignored (a straight thread)",
+            defect: Defect::Reads(no_taper),
+            scenarios: &["gsk/g92_3/taper_inch_i"],
+            families: &["GSK-G923"],
         },
     ]
 }
