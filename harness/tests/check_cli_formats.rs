@@ -264,7 +264,26 @@ fn conformant_csv_recordings_pass_and_say_what_csv_cannot_carry() {
     }
     let reference = reference(&scenario(CLAMP));
     let (c, m) = csv_of("csvok", &reference, &record(&reference, Rec::REALISTIC));
-    let out = check(&[CLAMP, "--trace", c.to_str().unwrap(), "--map", m.to_str().unwrap()]);
+    let (json, junit) = (c.with_extension("json"), c.with_extension("xml"));
+    let out = check(&[
+        CLAMP,
+        "--trace",
+        c.to_str().unwrap(),
+        "--map",
+        m.to_str().unwrap(),
+        "--report",
+        json.to_str().unwrap(),
+        "--junit",
+        junit.to_str().unwrap(),
+    ]);
+    // The reports say it too: JSON `not_comparable`, a skipped JUnit test case.
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["conformant"], true);
+    let nc = &v["report"]["not_comparable"][0];
+    assert_eq!((nc["what"].as_str(), nc["count"].as_u64()), (Some("M29, M68, M69, M30"), Some(4)), "{v}");
+    let x = std::fs::read_to_string(&junit).unwrap();
+    assert!(x.contains("failures=\"0\" errors=\"0\" skipped=\"1\""), "{x}");
+    assert!(x.contains("<skipped message=\"not comparable: csv carries no M/S/T functions\"/>"), "{x}");
     assert!(
         stdout(&out).contains(
             "  n/a  M29, M68, M69, M30 (4 reference events): not comparable: csv carries no M/S/T functions"

@@ -40,9 +40,19 @@ struct SigCol {
 
 struct CsvSource {
     r: Box<dyn BufRead>,
+    /// A line that is not wholly in the reader's buffer, copied.
+    buf: Vec<u8>,
+    rows: Rows,
+}
+
+/// Rows read in a batch from the reader's buffer before the events are handed on.
+const BATCH_ROWS: usize = 256;
+
+/// The row parser: everything but the reader, so that a row is parsed in place in the reader's
+/// buffer.
+struct Rows {
     delim: u8,
     line_no: u64,
-    buf: Vec<u8>,
     unquoted: Vec<u8>,
     fields: Vec<(usize, usize)>,
     /// Actions by column (0-based); a column may feed several signals.
@@ -303,11 +313,9 @@ pub(crate) fn open(
         first_t_us: None,
     };
     let n_sigs = sigs.len();
-    let src = CsvSource {
-        r,
+    let rows = Rows {
         delim: map.delimiter,
         line_no,
-        buf,
         unquoted: Vec::new(),
         fields: Vec::new(),
         actions,
@@ -321,33 +329,13 @@ pub(crate) fn open(
         new_levels: vec![false; n_sigs],
         last_t: None,
     };
-    Ok((meta, Box::new(src)))
+    Ok((meta, Box::new(CsvSource { r, buf, rows })))
 }
 
-impl CsvSource {
-    /// Reads the next line into `self.buf` (as [`read_line`]): a line wholly in the reader's
-    /// buffer is copied with one `memchr` and one copy, without the `Take`/`read_until` path.
-    fn next_line(&mut self, ctx: &Ctx) -> Result<bool, ImportError> {
-        let avail = match self.r.fill_buf() {
-            Ok(a) => a,
-            Err(_) => return read_line(ctx, self.r.as_mut(), &mut self.buf, self.line_no, MAX_LINE),
-        };
-        match memchr::memchr(b'\n', avail) {
-            Some(i) if i <= MAX_LINE => {
-                self.buf.clear();
-                let end = if i > 0 && avail[i - 1] == b'\r' { i - 1 } else { i };
-                self.buf.extend_from_slice(&avail[..end]);
-                self.r.consume(i + 1);
-                Ok(true)
-            }
-            _ => read_line(ctx, self.r.as_mut(), &mut self.buf, self.line_no, MAX_LINE),
-        }
-    }
-
-    /// Parses the row in `self.buf`: `Ok(Some(t))` with the sample and new levels set.
-    fn row(&mut self, ctx: &Ctx, sample: &mut Sample) -> Result<u64, ImportError> {
+impl Rows {
+    /// Parses the row `line`: `Ok(t)` with the sample and new levels set.
+    fn row(&mut self, ctx: &Ctx, line: &[u8], sample: &mut Sample) -> Result<u64, ImportError> {
         let line_no = self.line_no;
-        let line = &self.buf[..];
         let data = split(line, self.delim, &mut self.unquoted, &mut self.fields).map_err(|at| {
             ctx.err(ErrorKind::BadRow, line_no, char_col(line, at), "a quote is not closed")
                 .expected("a closing `\"`")
@@ -471,40 +459,88 @@ impl CsvSource {
     }
 }
 
+impl Rows {
+    /// One line (its number already counted): a blank line is skipped; a row gives its sample
+    /// and then its edges, falls before rises (a row cannot tell the order of changes between
+    /// two rows, and a handshake such as RGSPP off / RGSPM on never has both on); a faulty row
+    /// is an error, or counted when lenient.
+    fn line(
+        &mut self,
+        ctx: &mut Ctx,
+        line: &[u8],
+        out: &mut VecDeque<TraceEvent>,
+    ) -> Result<(), ImportError> {
+        if line.first().is_none_or(u8::is_ascii_whitespace) && line.iter().all(u8::is_ascii_whitespace) {
+            return Ok(());
+        }
+        let mut sample = Sample::default();
+        self.new_levels.copy_from_slice(&self.levels);
+        match self.row(ctx, line, &mut sample) {
+            Ok(t) => {
+                self.last_t = Some(t);
+                out.push_back(TraceEvent { t_us: t, event: Event::Sample(sample) });
+                for rise in [false, true] {
+                    for (i, s) in self.sigs.iter().enumerate() {
+                        if self.new_levels[i] != self.levels[i] && self.new_levels[i] == rise {
+                            self.levels[i] = rise;
+                            out.push_back(TraceEvent {
+                                t_us: t,
+                                event: Event::Signal { signal: s.signal, value: rise },
+                            });
+                        }
+                    }
+                }
+                Ok(())
+            }
+            Err(e) => ctx.fault(e),
+        }
+    }
+}
+
 impl Source for CsvSource {
     fn fill(&mut self, ctx: &mut Ctx, out: &mut VecDeque<TraceEvent>) -> Result<bool, ImportError> {
         loop {
-            self.line_no += 1;
-            if !self.next_line(ctx)? {
-                return Ok(false);
-            }
-            if self.buf.first().is_none_or(u8::is_ascii_whitespace)
-                && self.buf.iter().all(u8::is_ascii_whitespace)
-            {
-                continue;
-            }
-            let mut sample = Sample::default();
-            self.new_levels.copy_from_slice(&self.levels);
-            match self.row(ctx, &mut sample) {
-                Ok(t) => {
-                    self.last_t = Some(t);
-                    out.push_back(TraceEvent { t_us: t, event: Event::Sample(sample) });
-                    // Falls before rises: a row cannot tell the order of changes between two
-                    // rows, and a handshake (RGSPP off, RGSPM on) never has both on.
-                    for rise in [false, true] {
-                        for (i, s) in self.sigs.iter().enumerate() {
-                            if self.new_levels[i] != self.levels[i] && self.new_levels[i] == rise {
-                                self.levels[i] = rise;
-                                out.push_back(TraceEvent {
-                                    t_us: t,
-                                    event: Event::Signal { signal: s.signal, value: rise },
-                                });
-                            }
-                        }
+            // The complete lines in the reader's buffer, parsed in place (no copy), a batch at
+            // a time.
+            let mut used = 0;
+            let mut n = 0;
+            if let Ok(avail) = self.r.fill_buf() {
+                if avail.is_empty() {
+                    return Ok(false);
+                }
+                while n < BATCH_ROWS {
+                    let Some(i) = memchr::memchr(b'\n', &avail[used..]).filter(|&i| i <= MAX_LINE) else {
+                        break;
+                    };
+                    let end = if i > 0 && avail[used + i - 1] == b'\r' { used + i - 1 } else { used + i };
+                    self.rows.line_no += 1;
+                    let res = self.rows.line(ctx, &avail[used..end], out);
+                    used += i + 1;
+                    n += 1;
+                    if let Err(e) = res {
+                        self.r.consume(used);
+                        return Err(e);
                     }
+                }
+            }
+            if n > 0 {
+                self.r.consume(used);
+                if !out.is_empty() {
                     return Ok(true);
                 }
-                Err(e) => ctx.fault(e)?,
+                continue;
+            }
+            // A line that ends beyond the buffer (or the last one, without a line end): copied.
+            self.rows.line_no += 1;
+            if !read_line(ctx, self.r.as_mut(), &mut self.buf, self.rows.line_no, MAX_LINE)? {
+                return Ok(false);
+            }
+            let line = std::mem::take(&mut self.buf);
+            let res = self.rows.line(ctx, &line, out);
+            self.buf = line;
+            res?;
+            if !out.is_empty() {
+                return Ok(true);
             }
         }
     }
