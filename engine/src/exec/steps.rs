@@ -341,6 +341,14 @@ impl Exec<'_> {
             lock_spindle: self.machine_lock,
         };
         if m.duration() == 0 {
+            // A motion of no duration (a G01 at feed override 0 %) still moves the command
+            // positions; under machine lock the machine stays where it is (COM-MOT-04), as
+            // `end_motion_then` does for a motion that ran (found by the campaign, seed 13).
+            if m.locked {
+                for i in 0..AXES {
+                    self.lock_offset[i] += target[i] - m.start[i];
+                }
+            }
             self.cmd = target;
             return;
         }
