@@ -517,7 +517,92 @@ fn cases() -> Vec<Case> {
             scenarios: &["gsk/g92_3/taper_inch_i"],
             families: &["GSK-G923"],
         },
+        Case {
+            name: "cycle 832 air cuts Q476 not made",
+            defect: Defect::Reads(no_air_cuts),
+            scenarios: &["heidenhain/c832/multi_start_air_cuts"],
+            families: &["HDH-C832"],
+        },
+        Case {
+            name: "cycle 832 multi-start Q475 cut as one start",
+            defect: Defect::Reads(one_start),
+            scenarios: &["heidenhain/c832/multi_start_air_cuts"],
+            families: &["HDH-C832"],
+        },
+        Case {
+            name: "cycle 832 infeed angle not checked against the flank (hei.flank_angle_deg forced 90)",
+            defect: Defect::Force("heidenhain", &[("hei.flank_angle_deg", None, 90.0)]),
+            scenarios: &["heidenhain/c832/caution_infeed_above_flank"],
+            families: &["HDH-C832"],
+        },
+        Case {
+            name: "cycle 832 negative-diameter pre-position not checked (hei.neg_diameter_alarm forced 0)",
+            defect: Defect::Force("heidenhain", &[("hei.neg_diameter_alarm", None, 0.0)]),
+            scenarios: &["heidenhain/c832/caution_negative_diameter"],
+            families: &["HDH-C832"],
+        },
+        Case {
+            name: "LinuxCNC G84 under G98 returns to R (Fanuc habit)",
+            defect: Defect::Reads(swap_return_levels),
+            scenarios: &["linuxcnc/cycles/g84_g98_orderings"],
+            families: &["LCNC-CYC", "LCNC-TAP"],
+        },
+        Case {
+            name: "LinuxCNC canned cycle repeats L ignored",
+            defect: Defect::Reads(no_repeats),
+            scenarios: &["linuxcnc/cycles/g84_g98_orderings"],
+            families: &["LCNC-CYC", "LCNC-TAP"],
+        },
+        Case {
+            name: "LinuxCNC G33.1 overshoot not limited (nc.rigid_overshoot_pitches forced 100)",
+            defect: Defect::Force("linuxcnc", &[("nc.rigid_overshoot_pitches", None, 100.0)]),
+            scenarios: &["linuxcnc/g331/overshoot"],
+            families: &["LCNC-G331"],
+        },
+        Case {
+            name: "LinuxCNC G76 spring passes H ignored",
+            defect: Defect::Reads(no_spring_passes),
+            scenarios: &["linuxcnc/g76/passes"],
+            families: &["LCNC-G76"],
+        },
     ]
+}
+
+/// Cycle 832: the value of Klartext parameter `q` (e.g. `Q476=`) replaced by `value` wherever it
+/// is set.
+fn set_q(p: &str, q: &str, value: &str) -> String {
+    let mut out = String::with_capacity(p.len());
+    let mut rest = p;
+    while let Some(i) = rest.find(q) {
+        let (head, tail) = rest.split_at(i + q.len());
+        out.push_str(head);
+        let end =
+            tail.find(|c: char| !(c.is_ascii_digit() || matches!(c, '+' | '-' | '.'))).unwrap_or(tail.len());
+        out.push_str(value);
+        rest = &tail[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Cycle 832: air cuts Q476 not made.
+fn no_air_cuts(p: &str) -> String {
+    set_q(p, "Q476=", "+0")
+}
+
+/// Cycle 832: one start whatever Q475 says.
+fn one_start(p: &str) -> String {
+    set_q(p, "Q475=", "+1")
+}
+
+/// LinuxCNC: the repeat count L of a canned cycle is not read.
+fn no_repeats(p: &str) -> String {
+    map_words(p, |c, n| (c != 'L').then(|| format!("{c}{n}")))
+}
+
+/// LinuxCNC G76: spring passes H are not read.
+fn no_spring_passes(p: &str) -> String {
+    map_words(p, |c, n| (c != 'H').then(|| format!("{c}{n}")))
 }
 
 fn root() -> PathBuf {
