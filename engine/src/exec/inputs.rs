@@ -196,6 +196,7 @@ impl Exec<'_> {
         self.hold_suppressed = false;
         self.override_locked = false;
         self.overload = None;
+        self.css = None;
         self.interp.reset(self.cmd);
         self.set_phase(Phase::Idle);
         self.finish(EndReason::Reset);

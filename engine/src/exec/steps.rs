@@ -62,7 +62,11 @@ impl Exec<'_> {
         }
         match step {
             Step::Phase(p) => self.set_phase(p),
-            Step::Rapid { target } => self.start_rapid(target),
+            Step::Rapid { target } => {
+                // Under G96 the speed for the end point, from the start of the rapid (DEC-66).
+                self.css_follow(target[0]);
+                self.start_rapid(target)
+            }
             Step::Feed { target, feed } => {
                 let len = path_len(&self.cmd, &target);
                 if let Some(profile) = self.feed_profile(len, feed) {
@@ -139,6 +143,7 @@ impl Exec<'_> {
                 }
             }
             Step::OverrideLock(b) => self.override_locked = b,
+            Step::Css(c) => self.css_set(c),
             Step::Overload(w) => {
                 self.overload = w;
                 self.over_since = None;
@@ -395,7 +400,10 @@ impl Exec<'_> {
         };
         let max = self.cfg.spindle_max_rpm as f64;
         let spindle_ovr = if self.override_locked { 100 } else { self.spindle_override };
-        let speed = (self.s_cmd as f64 * spindle_ovr as f64 / 100.0).min(max);
+        let speed = match self.css {
+            Some(css) => self.css_speed(&css, self.cmd[0]),
+            None => (self.s_cmd as f64 * spindle_ovr as f64 / 100.0).min(max),
+        };
         let mut orient_fin = 0;
         match effect {
             SpindleEffect::None => {}
