@@ -106,7 +106,9 @@ fn knd_lex_basics_run_and_refusals_are_located() {
     assert!(codes(&t).is_empty(), "{:?}", codes(&t));
     assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd);
     for (p, code, line) in [
-        ("G96 S100;\n", "NC-1004", 1),
+        ("G96 S100.5;\n", "NC-1001", 1),
+        ("G96;\nM03;\nG00 X10 S100000;\n", "NC-1001", 3),
+        ("G90 X10 Z-5 F1;\n", "NC-1004", 1),
         ("G00 X0;\nG71 U1 R1;\n", "NC-1004", 2),
         ("M03 M08;\n", "NC-1016", 1),
         ("G31 X0;\n", "NC-1003", 1),
