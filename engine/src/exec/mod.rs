@@ -127,6 +127,11 @@ pub(crate) struct Exec<'a> {
     await_no: u64,
     /// Constant surface speed in force (KND G96).
     css: Option<Css>,
+    /// The present motion follows the spindle's encoder in speed mode (`Step::Follow`).
+    following: bool,
+    /// A braking coast cut short at the allowance (NC-1050): when it ends (µs), the spindle's
+    /// speed then (signed rpm) and its braking deceleration (rpm/µs).
+    coast: Option<(Micros, f64, f64)>,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -202,6 +207,8 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         motion_step: None,
         await_no: 0,
         css: None,
+        following: false,
+        coast: None,
     };
     ex.main_loop();
 }
@@ -454,6 +461,11 @@ impl Exec<'_> {
                 if let Some(a) = self.stall_angle {
                     return (a, 0.0);
                 }
+                // The instant a braking coast is cut short, the spindle still turns.
+                let rpm = match self.coast {
+                    Some((te, r, _)) if te == t => r,
+                    _ => rpm,
+                };
                 return (self.spindle.angle0 + da, rpm);
             }
         }

@@ -362,6 +362,7 @@ impl Exec<'_> {
     /// tapping stroke drops RGSPP / RGSPM and (with `zsp_answer`) asks the drive for zero speed.
     pub(super) fn end_motion_then(&mut self, zsp_answer: bool) {
         let Some(m) = self.motion.take() else { return };
+        self.following = false;
         let end = m.end();
         if let Some((da, _)) = m.spindle(end) {
             let angle = match self.stall_angle.take() {
@@ -372,7 +373,13 @@ impl Exec<'_> {
             self.spindle.hold(end, angle);
             self.set_signal(Signal::Rgspp, false);
             self.set_signal(Signal::Rgspm, false);
-            if zsp_answer {
+            // A coast cut short at the allowance: the spindle brakes on, its ZSP comes after.
+            let coast = self.coast.take().filter(|c| c.0 == end && c.1 != 0.0 && !self.spindle.stalled);
+            if let Some((_, rpm, decel)) = coast {
+                self.spindle.rpm0 = rpm;
+                self.spindle.seg_accel = Some(decel);
+                self.spindle_changed();
+            } else if zsp_answer {
                 let zsp = self.cfg.plc.zsp_us;
                 self.plc.answer(
                     self.now,

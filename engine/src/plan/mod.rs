@@ -129,6 +129,10 @@ pub struct Follow {
     /// `Cut`: raised when the spindle is not turning; `Brake`: raised when the axis reaches
     /// `target` before the spindle has stopped.
     pub alarm: AlarmKind,
+    /// The axis is tied to the encoder to the end (KND G93): a spindle stall stops it at once
+    /// (`SpindleNotTurning`), and a spindle whose braking the axis cannot follow any farther
+    /// (`Brake` cut short) goes on braking to rest.
+    pub encoder_bound: bool,
 }
 
 /// What the spindle does while an axis follows it.
