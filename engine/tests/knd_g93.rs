@@ -176,3 +176,17 @@ fn knd_g93_07_the_return_turns_at_s_times_the_spindle_override() {
     let plain_min = plain.samples().map(|(_, s)| s.spindle_mrpm).min().unwrap();
     assert!((plain_min + 300_000).abs() < 500, "{plain_min}");
 }
+
+#[test]
+fn knd_g93_after_g96_then_g97_taps_at_the_last_surface_speed() {
+    // G96 S150 at X100: 477.465 rpm; G97 without S keeps it as S (KND-CSS-04), so G93 runs at it
+    // (rounded to 477 rpm for the return) instead of refusing a spindle without S.
+    let prog = "G00 X100 Z5;\nG96 S150 M03;\nG04 P500;\nG97;\nG93 Z-5 F1;\nM30;\n";
+    let t = run("knd-lathe", &[], prog, &RunOptions::default());
+    assert!(codes(&t).is_empty(), "{:?}", codes(&t));
+    assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd);
+    let top = t.samples().map(|(_, s)| s.spindle_mrpm).max().unwrap();
+    let low = t.samples().map(|(_, s)| s.spindle_mrpm).min().unwrap();
+    assert!((477_400..=477_500).contains(&top), "{top}");
+    assert!((-477_000..=-470_000).contains(&low), "{low}");
+}

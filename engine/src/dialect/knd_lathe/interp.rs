@@ -315,6 +315,7 @@ impl Interpreter for KndInterp {
         }
         let mut motion_set = None;
         let mut nonmodal = None;
+        let css_before = self.css();
         for &(g, word) in &w.g {
             match g {
                 0 | 10 | 20 | 30 | 320 | 920 | 930 => motion_set = Some(g),
@@ -349,6 +350,10 @@ impl Interpreter for KndInterp {
                 self.s_cmd = s;
                 pre.push(Step::Function { letter: 'S', code: s, effect: SpindleEffect::Speed(s) });
             }
+        }
+        // G96 → G97 without S: the last speed of G96 becomes S (KND-CSS-04).
+        if let (Some(c), false, None) = (css_before, self.css_on, w.get('S')) {
+            self.s_cmd = c.rpm(self.pos[X], self.cfg.spindle_max_rpm).round() as u32;
         }
         if let Some(t) = tool_t(&w)? {
             pre.push(Step::Function { letter: 'T', code: t, effect: SpindleEffect::None });
