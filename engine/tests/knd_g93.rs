@@ -106,7 +106,9 @@ fn knd_lex_basics_run_and_refusals_are_located() {
     assert!(codes(&t).is_empty(), "{:?}", codes(&t));
     assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd);
     for (p, code, line) in [
-        ("G96 S100;\n", "NC-1004", 1),
+        ("G96 S100.5;\n", "NC-1001", 1),
+        ("G96;\nM03;\nG00 X10 S100000;\n", "NC-1001", 3),
+        ("G90 X10 Z-5 F1;\n", "NC-1004", 1),
         ("G00 X0;\nG71 U1 R1;\n", "NC-1004", 2),
         ("M03 M08;\n", "NC-1016", 1),
         ("G31 X0;\n", "NC-1003", 1),
@@ -173,4 +175,18 @@ fn knd_g93_07_the_return_turns_at_s_times_the_spindle_override() {
     let plain = run("knd-lathe", &[], G93, &sampled(InputSchedule::default()));
     let plain_min = plain.samples().map(|(_, s)| s.spindle_mrpm).min().unwrap();
     assert!((plain_min + 300_000).abs() < 500, "{plain_min}");
+}
+
+#[test]
+fn knd_g93_after_g96_then_g97_taps_at_the_last_surface_speed() {
+    // G96 S150 at X100: 477.465 rpm; G97 without S keeps it as S (KND-CSS-04), so G93 runs at it
+    // (rounded to 477 rpm for the return) instead of refusing a spindle without S.
+    let prog = "G00 X100 Z5;\nG96 S150 M03;\nG04 P500;\nG97;\nG93 Z-5 F1;\nM30;\n";
+    let t = run("knd-lathe", &[], prog, &RunOptions::default());
+    assert!(codes(&t).is_empty(), "{:?}", codes(&t));
+    assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd);
+    let top = t.samples().map(|(_, s)| s.spindle_mrpm).max().unwrap();
+    let low = t.samples().map(|(_, s)| s.spindle_mrpm).min().unwrap();
+    assert!((477_400..=477_500).contains(&top), "{top}");
+    assert!((-477_000..=-470_000).contains(&low), "{low}");
 }

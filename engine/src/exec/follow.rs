@@ -51,6 +51,7 @@ impl Exec<'_> {
                 backlash[f.axis] = b;
                 target[f.axis] = f.target;
                 self.start_motion(target, Path::Rapid { profiles, backlash });
+                self.following = f.encoder_bound && self.motion.is_some();
             }
             FollowKind::Brake { brake_us } => {
                 if rpm == 0.0 {
@@ -62,12 +63,19 @@ impl Exec<'_> {
                 let room = d.unsigned_abs() as f64;
                 let (profile, over) = Profile::braking(v0, total, room, period);
                 let travel = profile.dist.round() as Nm;
+                if over && f.encoder_bound {
+                    // Cut short at the allowance: the spindle goes on braking from its speed
+                    // there (KND-G93-05).
+                    let left = 1.0 - profile.total as f64 / total as f64;
+                    self.coast = Some((now + profile.total, rpm * left, rpm.abs() / total as f64));
+                }
                 target[f.axis] = self.cmd[f.axis] + d.signum() * travel;
                 self.spindle.hold(now, angle);
                 self.stall_angle = None;
                 let spin = rpm.signum();
                 self.start_motion(target, Path::Tap { profile, axis: f.axis, backlash: 0.0, lead, spin });
                 self.free_spindle();
+                self.following = f.encoder_bound && self.motion.is_some();
                 if over {
                     let a = Alarm::new(
                         f.alarm,
@@ -101,8 +109,22 @@ impl Exec<'_> {
                 let spin = if forward { 1.0 } else { -1.0 };
                 self.start_motion(target, Path::Tap { profile, axis: f.axis, backlash: b, lead, spin });
                 self.free_spindle();
+                self.following = f.encoder_bound && self.motion.is_some();
             }
         }
+    }
+
+    /// The spindle stalled while the axis follows its encoder: the axis stops with it at once and
+    /// the cycle ends with NC-1017, the tap where it stopped (KND-G93-11).
+    pub(super) fn follow_stalled(&mut self) {
+        if !self.following || self.motion.is_none() {
+            return;
+        }
+        self.stop_motion_now();
+        self.raise(Alarm::new(
+            AlarmKind::SpindleNotTurning,
+            "the spindle stalled during the cycle: the tap, following its encoder, stops with it",
+        ));
     }
 
     /// The motion just started keeps its spindle turning under machine lock (speed mode).

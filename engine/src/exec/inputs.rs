@@ -116,10 +116,13 @@ impl Exec<'_> {
                 if !b {
                     self.spindle.command(self.now, target);
                 }
-                if b && self.stall_angle.is_none() {
+                if b && self.stall_angle.is_none() && !self.following {
                     self.stall_checks();
                 }
                 self.spindle_changed();
+                if b {
+                    self.follow_stalled();
+                }
             }
             Input::SetParam { id, axis, value } => match self.params.set(&id, axis, value) {
                 Ok(()) => {
@@ -165,7 +168,7 @@ impl Exec<'_> {
     }
 
     /// Stops the present motion where it is (decelerating within the interpolation period).
-    fn stop_motion_now(&mut self) {
+    pub(super) fn stop_motion_now(&mut self) {
         if let Some(m) = &mut self.motion {
             m.stop_at(self.now, f64::INFINITY, self.cfg.period_us);
         }
@@ -196,6 +199,7 @@ impl Exec<'_> {
         self.hold_suppressed = false;
         self.override_locked = false;
         self.overload = None;
+        self.css = None;
         self.interp.reset(self.cmd);
         self.set_phase(Phase::Idle);
         self.finish(EndReason::Reset);

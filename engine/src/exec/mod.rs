@@ -7,6 +7,7 @@
 //! after their own delays.
 
 pub mod config;
+mod css;
 mod follow;
 mod inputs;
 pub mod motion;
@@ -26,7 +27,7 @@ use crate::alarm::Alarm;
 use crate::dialect::Interpreter;
 use crate::input::Input;
 use crate::parse::Program;
-use crate::plan::{OverloadWatch, Pos, Step};
+use crate::plan::{Css, OverloadWatch, Pos, Step};
 use crate::trace::{
     EndReason, EndSummary, Event, Phase, Sample, Signal, Signals, TraceEvent, TraceMeta, TraceSink, AXES,
 };
@@ -124,6 +125,13 @@ pub(crate) struct Exec<'a> {
     motion_step: Option<Step>,
     /// Serial number of the present `Step::AwaitSignal` wait (its timer checks it).
     await_no: u64,
+    /// Constant surface speed in force (KND G96).
+    css: Option<Css>,
+    /// The present motion follows the spindle's encoder in speed mode (`Step::Follow`).
+    following: bool,
+    /// A braking coast cut short at the allowance (NC-1050): when it ends (µs), the spindle's
+    /// speed then (signed rpm) and its braking deceleration (rpm/µs).
+    coast: Option<(Micros, f64, f64)>,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -198,6 +206,9 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         hold_requested: false,
         motion_step: None,
         await_no: 0,
+        css: None,
+        following: false,
+        coast: None,
     };
     ex.main_loop();
 }
@@ -259,6 +270,9 @@ impl Exec<'_> {
         if let Some(c) = self.next_axis_crossing() {
             t = t.min(c);
         }
+        if let Some(c) = self.css_next() {
+            t = t.min(c);
+        }
         t
     }
 
@@ -301,6 +315,7 @@ impl Exec<'_> {
                 }
             }
         }
+        self.css_tick(t);
         match self.active.clone() {
             Active::Moving if self.motion.as_ref().is_some_and(|m| m.end() <= t) => {
                 self.end_motion();
@@ -446,6 +461,11 @@ impl Exec<'_> {
                 if let Some(a) = self.stall_angle {
                     return (a, 0.0);
                 }
+                // The instant a braking coast is cut short, the spindle still turns.
+                let rpm = match self.coast {
+                    Some((te, r, _)) if te == t => r,
+                    _ => rpm,
+                };
                 return (self.spindle.angle0 + da, rpm);
             }
         }

@@ -62,7 +62,11 @@ impl Exec<'_> {
         }
         match step {
             Step::Phase(p) => self.set_phase(p),
-            Step::Rapid { target } => self.start_rapid(target),
+            Step::Rapid { target } => {
+                // Under G96 the speed for the end point, from the start of the rapid (DEC-66).
+                self.css_follow(target[0]);
+                self.start_rapid(target)
+            }
             Step::Feed { target, feed } => {
                 let len = path_len(&self.cmd, &target);
                 if let Some(profile) = self.feed_profile(len, feed) {
@@ -139,6 +143,7 @@ impl Exec<'_> {
                 }
             }
             Step::OverrideLock(b) => self.override_locked = b,
+            Step::Css(c) => self.css_set(c),
             Step::Overload(w) => {
                 self.overload = w;
                 self.over_since = None;
@@ -365,6 +370,7 @@ impl Exec<'_> {
     /// tapping stroke drops RGSPP / RGSPM and (with `zsp_answer`) asks the drive for zero speed.
     pub(super) fn end_motion_then(&mut self, zsp_answer: bool) {
         let Some(m) = self.motion.take() else { return };
+        self.following = false;
         let end = m.end();
         if let Some((da, _)) = m.spindle(end) {
             let angle = match self.stall_angle.take() {
@@ -375,7 +381,13 @@ impl Exec<'_> {
             self.spindle.hold(end, angle);
             self.set_signal(Signal::Rgspp, false);
             self.set_signal(Signal::Rgspm, false);
-            if zsp_answer {
+            // A coast cut short at the allowance: the spindle brakes on, its ZSP comes after.
+            let coast = self.coast.take().filter(|c| c.0 == end && c.1 != 0.0 && !self.spindle.stalled);
+            if let Some((_, rpm, decel)) = coast {
+                self.spindle.rpm0 = rpm;
+                self.spindle.seg_accel = Some(decel);
+                self.spindle_changed();
+            } else if zsp_answer {
                 let zsp = self.cfg.plc.zsp_us;
                 self.plc.answer(
                     self.now,
@@ -403,7 +415,10 @@ impl Exec<'_> {
         };
         let max = self.cfg.spindle_max_rpm as f64;
         let spindle_ovr = if self.override_locked { 100 } else { self.spindle_override };
-        let speed = (self.s_cmd as f64 * spindle_ovr as f64 / 100.0).min(max);
+        let speed = match self.css {
+            Some(css) => self.css_speed(&css, self.cmd[0]),
+            None => (self.s_cmd as f64 * spindle_ovr as f64 / 100.0).min(max),
+        };
         let mut orient_fin = 0;
         match effect {
             SpindleEffect::None => {}

@@ -41,7 +41,15 @@ pub struct FollowTap {
 pub fn follow_tap(c: &FollowTap, out: &mut Vec<Step>) {
     let dir: Nm = if c.end >= c.start { 1 } else { -1 };
     let follow = |target, kind, alarm| {
-        Step::Follow(Follow { axis: c.axis, target, lead_nm: c.lead_nm, backlash: c.backlash, kind, alarm })
+        Step::Follow(Follow {
+            axis: c.axis,
+            target,
+            lead_nm: c.lead_nm,
+            backlash: c.backlash,
+            kind,
+            alarm,
+            encoder_bound: true,
+        })
     };
     let zsp = Step::AwaitSignal {
         signal: Signal::Zsp,
@@ -103,7 +111,15 @@ pub struct ReversingTap {
 pub fn reversing_tap(c: &ReversingTap, out: &mut Vec<Step>) {
     let dir: Nm = if c.end >= c.start { 1 } else { -1 };
     let follow = |target, kind, alarm| {
-        Step::Follow(Follow { axis: c.axis, target, lead_nm: c.lead_nm, backlash: false, kind, alarm })
+        Step::Follow(Follow {
+            axis: c.axis,
+            target,
+            lead_nm: c.lead_nm,
+            backlash: false,
+            kind,
+            alarm,
+            encoder_bound: false,
+        })
     };
     out.push(Step::HoldSuppress(true));
     out.push(Step::Phase(Phase::Cutting));

@@ -50,6 +50,30 @@ impl Plane {
     }
 }
 
+/// Constant surface speed in force (KND G96): the spindle speed follows the X diameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Css {
+    /// Surface speed, m/min.
+    pub m_min: u32,
+    /// The G50 S speed limit, rpm (0: none given, only the machine's).
+    pub limit_rpm: u32,
+    /// Machine X (radius, nm) of the spindle's centre line: the program's X0.
+    pub x_zero: Nm,
+}
+
+impl Css {
+    /// The speed for machine X `x` (radius, nm), rpm: 1000 · v / (π · diameter in mm), clamped by
+    /// the G50 S limit and `max_rpm`; on the centre line, the clamp.
+    pub fn rpm(&self, x: Nm, max_rpm: u32) -> f64 {
+        let limit = if self.limit_rpm > 0 { self.limit_rpm.min(max_rpm) } else { max_rpm } as f64;
+        let dia_mm = 2.0 * (x - self.x_zero).unsigned_abs() as f64 / 1e6;
+        if dia_mm == 0.0 {
+            return limit;
+        }
+        (1000.0 * self.m_min as f64 / (std::f64::consts::PI * dia_mm)).min(limit)
+    }
+}
+
 /// What an M function does to the spindle model when it is output.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SpindleEffect {
@@ -105,6 +129,10 @@ pub struct Follow {
     /// `Cut`: raised when the spindle is not turning; `Brake`: raised when the axis reaches
     /// `target` before the spindle has stopped.
     pub alarm: AlarmKind,
+    /// The axis is tied to the encoder to the end (KND G93): a spindle stall stops it at once
+    /// (`SpindleNotTurning`), and a spindle whose braking the axis cannot follow any farther
+    /// (`Brake` cut short) goes on braking to rest.
+    pub encoder_bound: bool,
 }
 
 /// What the spindle does while an axis follows it.
@@ -255,6 +283,8 @@ pub enum Step {
     Orient,
     /// Feed hold and single block suppressed (true) or honoured again (false).
     HoldSuppress(bool),
+    /// Constant surface speed on (G96, its S or limit changed) or off (G97).
+    Css(Option<Css>),
     /// Sets or clears the overload watch.
     Overload(Option<OverloadWatch>),
     /// M00 (optional = false) or M01 (optional = true): program stop.
@@ -367,4 +397,26 @@ pub fn expand_all(steps: Vec<Step>) -> Vec<Step> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Css;
+
+    #[test]
+    fn surface_speed_law_and_its_clamps() {
+        // X0 of the program at machine radius 10 mm; 150 m/min.
+        let css = Css { m_min: 150, limit_rpm: 2000, x_zero: 10_000_000 };
+        // Diameter 100 mm (radius 50 mm from the centre line): 1000 x 150 / (pi x 100).
+        let r = css.rpm(60_000_000, 3000);
+        assert!((r - 477.464_829).abs() < 1e-5, "{r}");
+        // Either side of the centre line alike.
+        assert_eq!(css.rpm(-40_000_000, 3000), r);
+        // Small diameters: the G50 S limit; on the centre line the clamp.
+        assert_eq!(css.rpm(20_000_000, 3000), 2000.0);
+        assert_eq!(css.rpm(10_000_000, 3000), 2000.0);
+        // No G50 S: the machine's limit; a G50 S above it: the machine's.
+        assert_eq!(Css { limit_rpm: 0, ..css }.rpm(10_000_000, 3000), 3000.0);
+        assert_eq!(Css { limit_rpm: 5000, ..css }.rpm(10_000_000, 3000), 3000.0);
+    }
 }

@@ -1,5 +1,5 @@
 //! The `knd-lathe` interpreter: modal state and block → steps for the program basics of seed 001
-//! (G00, G01, G02/G03, G04, G28, G50, G32, G92, G93, G97, G98/G99, M00/M02/M03/M04/M05/M08/M09/
+//! (G00, G01, G02/G03, G04, G28, G50, G32, G92, G93, G96/G97, G98/G99, M00/M02/M03/M04/M05/M08/M09/
 //! M30) and the G93 tapping cycle (rules KND-* in `docs/rules/knd-lathe.md`).
 
 use crate::alarm::{Alarm, AlarmKind};
@@ -8,7 +8,7 @@ use crate::dialect::Interpreter;
 use crate::params::Params;
 use crate::parse::{Block, Word};
 use crate::plan::follow_tap::{follow_tap, FollowTap};
-use crate::plan::{Feed, Plane, Pos, SpindleEffect, Step};
+use crate::plan::{Css, Feed, Plane, Pos, SpindleEffect, Step};
 use crate::trace::{Phase, AXES};
 use crate::units::{Micros, Nm, NM_PER_INCH, NM_PER_MM};
 
@@ -58,6 +58,14 @@ pub struct KndInterp {
     g92_z: Option<Nm>,
     /// Spindle direction commanded: 1 (M03), −1 (M04), 0 (M05, power-on).
     spindle_dir: i8,
+    /// G96 in force (power-on: G97).
+    css_on: bool,
+    /// The G96 surface speed, m/min, kept through G97 (KND-CSS-03).
+    css_s: u32,
+    /// The G50 S limit, rpm (0: none given).
+    css_limit: u32,
+    /// The constant surface speed last sent to the executor.
+    css_sent: Option<Css>,
 }
 
 impl KndInterp {
@@ -76,6 +84,10 @@ impl KndInterp {
             s_cmd: 0,
             spindle_dir: 0,
             g92_z: None,
+            css_on: false,
+            css_s: 0,
+            css_limit: 0,
+            css_sent: None,
         }
     }
 
@@ -211,7 +223,11 @@ impl KndInterp {
             return Err(w.block_alarm(AlarmKind::WordMissing, "G93 needs the end point Z(W)".into()));
         };
         let lead_nm = self.lead_word(w, 930)?;
-        if self.spindle_dir == 0 || self.s_cmd == 0 {
+        let rpm = match self.css() {
+            Some(c) => c.rpm(self.pos[X], self.cfg.spindle_max_rpm).round() as u32,
+            None => self.s_cmd,
+        };
+        if self.spindle_dir == 0 || rpm == 0 {
             return Err(w.block_alarm(
                 AlarmKind::SpindleNotTurning,
                 "G93: the spindle must be started (M03/M04 and S > 0) before the cycle".into(),
@@ -223,7 +239,7 @@ impl KndInterp {
                 start: self.pos[Z],
                 end,
                 lead_nm,
-                rpm: self.s_cmd,
+                rpm,
                 forward: self.spindle_dir > 0,
                 brake_us: self.cfg.brake_us,
                 allowance_nm: self.cfg.allowance_nm,
@@ -234,6 +250,23 @@ impl KndInterp {
         );
         body.push(Step::Phase(Phase::Idle));
         Ok(())
+    }
+
+    /// The constant surface speed in force (G96), or None under G97.
+    fn css(&self) -> Option<Css> {
+        self.css_on.then_some(Css { m_min: self.css_s, limit_rpm: self.css_limit, x_zero: self.zero[0] })
+    }
+
+    /// The block's output, led by a `Step::Css` when the constant surface speed changed.
+    fn emit(&mut self, out: &mut Vec<Step>, steps: [Vec<Step>; 3]) {
+        let css = self.css();
+        if css != self.css_sent {
+            self.css_sent = css;
+            out.push(Step::Css(css));
+        }
+        for s in steps {
+            out.extend(s);
+        }
     }
 
     /// G92 (KND-LEX-08): X to the thread's start, thread to the end point, X back, Z back.
@@ -282,14 +315,16 @@ impl Interpreter for KndInterp {
         }
         let mut motion_set = None;
         let mut nonmodal = None;
+        let css_before = self.css();
         for &(g, word) in &w.g {
             match g {
                 0 | 10 | 20 | 30 | 320 | 920 | 930 => motion_set = Some(g),
                 40 | 280 | 500 => nonmodal = Some(g),
                 980 => self.per_rev = false,
                 990 => self.per_rev = true,
-                970 => {}
-                960 | 900 | 940 | 700 | 710 | 720 | 730 | 740 | 750 | 760 => {
+                960 => self.css_on = true,
+                970 => self.css_on = false,
+                900 | 940 | 700 | 710 | 720 | 730 | 740 | 750 | 760 => {
                     return Err(w.alarm(
                         AlarmKind::NotModelled,
                         &word,
@@ -305,11 +340,20 @@ impl Interpreter for KndInterp {
                 }
             }
         }
-        if let Some(s) = speed_s(&w, self.cfg.spindle_max_rpm)? {
+        if self.css_on && nonmodal != Some(500) {
+            // Under G96, S is the surface speed in m/min (KND-CSS-01).
+            if let Some(v) = w.int_in('S', 0, 99_999, "surface speed (m/min)")? {
+                self.css_s = v as u32;
+            }
+        } else if let Some(s) = speed_s(&w, self.cfg.spindle_max_rpm)? {
             if nonmodal != Some(500) {
                 self.s_cmd = s;
                 pre.push(Step::Function { letter: 'S', code: s, effect: SpindleEffect::Speed(s) });
             }
+        }
+        // G96 → G97 without S: the last speed of G96 becomes S (KND-CSS-04).
+        if let (Some(c), false, None) = (css_before, self.css_on, w.get('S')) {
+            self.s_cmd = c.rpm(self.pos[X], self.cfg.spindle_max_rpm).round() as u32;
         }
         if let Some(t) = tool_t(&w)? {
             pre.push(Step::Function { letter: 'T', code: t, effect: SpindleEffect::None });
@@ -398,12 +442,11 @@ impl Interpreter for KndInterp {
                                 ),
                             ));
                         }
+                        self.css_limit = s.value.as_int().unwrap_or(0) as u32;
                     }
                 }
             }
-            out.extend(pre);
-            out.extend(body);
-            out.extend(post);
+            self.emit(out, [pre, body, post]);
             return Ok(());
         }
         let t = self.targets(&w)?;
@@ -445,14 +488,15 @@ impl Interpreter for KndInterp {
                 }
             }
         }
-        out.extend(pre);
-        out.extend(body);
-        out.extend(post);
+        self.emit(out, [pre, body, post]);
         Ok(())
     }
 
     fn reset(&mut self, pos: Pos) {
         self.pos = pos;
+        // Reset cancels G96: the executor has dropped it too (DEC-66).
+        self.css_on = false;
+        self.css_sent = None;
     }
 
     fn set_position(&mut self, pos: Pos) {
