@@ -240,6 +240,20 @@ pub fn dwell_p(w: &Words, point_is_seconds: bool) -> Result<Option<Micros>, Alar
     Ok(Some(us as Micros))
 }
 
+/// The dwell of a lathe G04: P in ms (as [`dwell_p`]), else X or U in seconds (0..99999 s), else
+/// none.
+pub fn lathe_dwell(w: &Words) -> Result<Micros, Alarm> {
+    if let Some(p) = dwell_p(w, false)? {
+        return Ok(p);
+    }
+    let Some(xw) = w.get('X').or(w.get('U')) else { return Ok(0) };
+    let us = xw.value.scaled(1_000_000);
+    if !(0..=99_999_000_000).contains(&us) {
+        return Err(w.alarm(AlarmKind::WordOutOfRange, &xw, "dwell X/U must be 0..99999 s".into()));
+    }
+    Ok(us as Micros)
+}
+
 /// A spindle speed word S: a whole number 0..=max rpm.
 pub fn speed_s(w: &Words, max: u32) -> Result<Option<u32>, Alarm> {
     let Some(word) = w.get('S') else { return Ok(None) };

@@ -4,7 +4,7 @@
 mod g923;
 
 use crate::alarm::{Alarm, AlarmKind};
-use crate::dialect::common::{dwell_p, g_name, speed_s, tool_t, Units, Words};
+use crate::dialect::common::{dwell_p, g_name, lathe_dwell, speed_s, tool_t, Units, Words};
 use crate::dialect::Interpreter;
 use crate::input::CurrentSource;
 use crate::params::Params;
@@ -576,22 +576,7 @@ impl Interpreter for GskInterp {
         if let Some((g, word)) = nonmodal {
             match g {
                 40 => {
-                    let us = match (dwell_p(&w, false)?, w.get('X').or(w.get('U'))) {
-                        (Some(p), _) => p,
-                        (None, Some(xw)) => {
-                            let us = xw.value.scaled(1_000_000);
-                            if !(0..=99_999_000_000).contains(&us) {
-                                return Err(w.alarm(
-                                    AlarmKind::WordOutOfRange,
-                                    &xw,
-                                    "dwell X/U must be 0..99999 s".into(),
-                                ));
-                            }
-                            us as Micros
-                        }
-                        (None, None) => 0,
-                    };
-                    body.push(Step::Dwell { us });
+                    body.push(Step::Dwell { us: lathe_dwell(&w)? });
                 }
                 280 => {
                     let mid = self.moved_pos(&targets);

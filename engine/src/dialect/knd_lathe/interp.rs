@@ -3,7 +3,7 @@
 //! M30) and the G93 tapping cycle (rules KND-* in `docs/rules/knd-lathe.md`).
 
 use crate::alarm::{Alarm, AlarmKind};
-use crate::dialect::common::{dwell_p, g_name, speed_s, tool_t, Units, Words};
+use crate::dialect::common::{g_name, lathe_dwell, speed_s, tool_t, Units, Words};
 use crate::dialect::Interpreter;
 use crate::params::Params;
 use crate::parse::{Block, Word};
@@ -243,8 +243,11 @@ impl KndInterp {
                 forward: self.spindle_dir > 0,
                 brake_us: self.cfg.brake_us,
                 allowance_nm: self.cfg.allowance_nm,
-                zsp_timeout_us: self.cfg.zsp_timeout_us,
+                zsp_timeout_us: Some(self.cfg.zsp_timeout_us),
                 backlash: self.cfg.rvdl,
+                encoder_bound: true,
+                not_turning: AlarmKind::SpindleNotTurning,
+                overshoot: AlarmKind::TapOvershoot,
             },
             body,
         );
@@ -381,22 +384,7 @@ impl Interpreter for KndInterp {
         if let Some(g) = nonmodal {
             match g {
                 40 => {
-                    let us = match (dwell_p(&w, false)?, w.get('X').or(w.get('U'))) {
-                        (Some(p), _) => p,
-                        (None, Some(xw)) => {
-                            let us = xw.value.scaled(1_000_000);
-                            if !(0..=99_999_000_000).contains(&us) {
-                                return Err(w.alarm(
-                                    AlarmKind::WordOutOfRange,
-                                    &xw,
-                                    "dwell X/U must be 0..99999 s".into(),
-                                ));
-                            }
-                            us as Micros
-                        }
-                        (None, None) => 0,
-                    };
-                    body.push(Step::Dwell { us });
+                    body.push(Step::Dwell { us: lathe_dwell(&w)? });
                 }
                 280 => {
                     let t = self.targets(&w)?;

@@ -11,7 +11,7 @@ use super::eval::System;
 use crate::alarm::{Alarm, AlarmKind};
 use crate::dialect::common::g_name;
 use crate::params::Params;
-use crate::plan::follow_tap::{reversing_tap, ReversingTap};
+use crate::plan::follow_tap::{follow_tap, FollowTap};
 use crate::plan::thread_g76::{thread_g76, ThreadG76, MAX_PASSES};
 use crate::plan::{Feed, Plane, Pos, SpindleEffect, Step};
 use crate::trace::Phase;
@@ -607,8 +607,8 @@ impl Machine {
         }
         let rpm = self.s.round().min(self.cfg.max_rpm) as u32;
         let brake_us = (rpm as f64 / self.cfg.max_rpm * self.cfg.ramp_us as f64) as Micros;
-        reversing_tap(
-            &ReversingTap {
+        follow_tap(
+            &FollowTap {
                 axis: 2,
                 start,
                 end,
@@ -616,7 +616,10 @@ impl Machine {
                 rpm: rpm.max(1),
                 forward: self.spindle > 0,
                 brake_us: brake_us.max(1000),
-                overshoot_max: (lead as f64 * self.cfg.overshoot_pitches).round() as Nm,
+                allowance_nm: (lead as f64 * self.cfg.overshoot_pitches).round() as Nm,
+                zsp_timeout_us: None,
+                backlash: false,
+                encoder_bound: false,
                 not_turning: AlarmKind::LcncSpindle,
                 overshoot: AlarmKind::LcncTapOvershoot,
             },
