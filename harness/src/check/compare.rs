@@ -28,6 +28,20 @@ struct Run {
     samples: u64,
 }
 
+impl Run {
+    /// A run whose first sample is at `t` (its worst is set by the first excess).
+    fn starting(t: i64) -> Run {
+        Run {
+            t_first: t,
+            t_worst: t,
+            excess: -1.0,
+            expected: String::new(),
+            actual: String::new(),
+            samples: 0,
+        }
+    }
+}
+
 /// The synchronisation state inside one recorded stroke.
 #[derive(Debug, Clone, Copy)]
 struct Stroke {
@@ -459,14 +473,7 @@ impl<'r> Comparator<'r> {
         let tol = mm_nm(self.tol.sync_mm) as f64;
         if err.abs() > tol {
             let excess = err.abs() - tol;
-            let run = self.sync_run.get_or_insert(Run {
-                t_first: t,
-                t_worst: t,
-                excess: -1.0,
-                expected: String::new(),
-                actual: String::new(),
-                samples: 0,
-            });
+            let run = self.sync_run.get_or_insert_with(|| Run::starting(t));
             run.samples += 1;
             if excess > run.excess {
                 run.excess = excess;
@@ -499,8 +506,9 @@ impl<'r> Comparator<'r> {
         }
         let w = ms_us(self.tol.envelope_ms);
         let tol = mm_nm(self.tol.position_mm) as f64;
-        let axes: Vec<_> = self.r.axes().to_vec();
-        for (k, a) in axes.iter().enumerate() {
+        // `r` outlives `self`'s borrow: no copy of the axes per recorded sample.
+        let r = self.r;
+        for (k, a) in r.axes().iter().enumerate() {
             if !self.carried.axis(a.index) {
                 continue;
             }
@@ -509,14 +517,7 @@ impl<'r> Comparator<'r> {
             let excess = (lo - tol - v).max(v - hi - tol);
             if excess > 0.0 {
                 self.max_env_nm = self.max_env_nm.max(excess);
-                let run = self.env_runs[k].get_or_insert(Run {
-                    t_first: t,
-                    t_worst: t,
-                    excess: -1.0,
-                    expected: String::new(),
-                    actual: String::new(),
-                    samples: 0,
-                });
+                let run = self.env_runs[k].get_or_insert_with(|| Run::starting(t));
                 run.samples += 1;
                 if excess > run.excess {
                     run.excess = excess;
