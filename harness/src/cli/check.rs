@@ -18,7 +18,7 @@ use super::{display_name, parse_error, run_scenario, EXIT_INPUT, EXIT_OK, EXIT_R
 use crate::check::{self, report, Anchor, CheckSpec, Tolerances};
 use crate::diag::InputError;
 use crate::import::{self, ColumnMap, Format, ImportError};
-use crate::input::{load_tolerances, read_utf8 as read};
+use crate::input::{self, load_tolerances};
 use crate::{params_yaml, scenario::load};
 
 /// Arguments of `nc-conform check`.
@@ -120,11 +120,11 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         let mut machine = Machine::new(dialect)
             .ok_or_else(|| InputError::new("--dialect", format!("unknown dialect `{dialect}`")))?;
         if let Some(p) = &args.params {
-            let yaml = read(p)?;
+            let yaml = input::read_utf8(p, input::YAML)?;
             params_yaml::apply(&yaml, &mut machine)
                 .map_err(|e| InputError::at(display_name(p), &yaml, e.span, e.message, e.expected))?;
         }
-        let text = read(&args.input)?;
+        let text = input::read_text(&args.input, input::PROGRAM)?;
         let program = machine.parse(&text).map_err(|e| parse_error(&input_name, &text, &e))?;
         let trace = machine.run_to_trace(&program, &RunOptions::default());
         (format!("{input_name} ({dialect}, default inputs)"), trace, None, Vec::new(), None)

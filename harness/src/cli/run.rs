@@ -4,7 +4,7 @@
 
 use std::fs::File;
 use std::io::{self, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::builder::PossibleValuesParser;
 use clap::Args;
@@ -14,6 +14,7 @@ use nc_engine::{Machine, RunOptions};
 use super::{display_name, parse_error, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::determinism::{self, Digest};
 use crate::diag::InputError;
+use crate::input;
 use crate::jsonl::JsonlWriter;
 use crate::params_yaml;
 
@@ -86,10 +87,10 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
         e
     })?;
     let program_name = display_name(&args.program);
-    let text = read_text(&args.program)?;
+    let text = input::read_text(&args.program, input::PROGRAM)?;
     if let Some(path) = &args.params {
         let name = display_name(path);
-        let yaml = read_text(path)?;
+        let yaml = input::read_text(path, input::YAML)?;
         params_yaml::apply(&yaml, &mut machine)
             .map_err(|e| InputError::at(name, &yaml, e.span, e.message, e.expected))?;
     }
@@ -130,12 +131,4 @@ fn exit_of(end: Option<EndReason>) -> u8 {
         Some(EndReason::ProgramEnd) => EXIT_OK,
         _ => EXIT_RUN_FAILED,
     }
-}
-
-/// Reads a text file (invalid UTF-8 is replaced, a leading byte-order mark dropped).
-fn read_text(path: &Path) -> Result<String, InputError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| InputError::new(display_name(path), format!("cannot read: {e}")))?;
-    let text = String::from_utf8_lossy(&bytes);
-    Ok(text.strip_prefix('\u{feff}').unwrap_or(&text).to_string())
 }

@@ -263,7 +263,7 @@ where
 
 /// The `dialect:` of a scenario file, read cheaply (None when not found).
 fn dialect_of(path: &Path) -> Option<String> {
-    let text = std::fs::read_to_string(path).ok()?;
+    let text = String::from_utf8(crate::input::read_capped(path, crate::input::YAML).ok()?).ok()?;
     text.lines()
         .find_map(|l| l.strip_prefix("dialect:"))
         .map(|d| d.trim().trim_matches(['"', '\'']).to_string())

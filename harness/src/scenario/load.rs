@@ -48,8 +48,9 @@ pub struct Scenario {
 ///
 /// Unreadable files, YAML errors, unknown keys, bad values, program syntax errors, each located.
 pub fn load(path: &Path, name: &str) -> Result<Scenario, InputError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| InputError::new(name, format!("cannot read: {e}")))?;
+    let bytes = crate::input::read_capped(path, crate::input::YAML).map_err(|m| InputError::new(name, m))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| InputError::new(name, "cannot read: stream did not contain valid UTF-8"))?;
     load_text(&text, name, path.parent().unwrap_or(Path::new(".")))
 }
 
@@ -149,13 +150,15 @@ fn program(file: &ScenarioFile, machine: &Machine, ctx: &Ctx, dir: &Path) -> Res
         }
         (None, Some(f)) => {
             let path: PathBuf = dir.join(&f.value);
-            let text = std::fs::read_to_string(&path).map_err(|err| {
-                ctx.err(
-                    f,
-                    format!("cannot read program file {}: {err}", path.display()),
-                    "a readable file, relative to the scenario",
-                )
-            })?;
+            let text = crate::input::read_capped(&path, crate::input::PROGRAM)
+                .map_err(|err| {
+                    ctx.err(
+                        f,
+                        format!("program file {}: {err}", path.display()),
+                        "a readable file, relative to the scenario",
+                    )
+                })
+                .map(crate::input::lossy_text)?;
             let shown = path.display().to_string();
             machine.parse(&text).map_err(|e| {
                 let span = Span::from_line_col(&text, e.line, e.col, e.len);

@@ -1,0 +1,228 @@
+//! Hostile inputs (issue 15): each ends with exit 1 or 2 and a clear first line on stderr, in
+//! under 512 MiB of address space and 60 s, never with a panic, an abort or a hang.
+//!
+//! Every run goes through `sh -c 'ulimit -v …'`, so an unbounded read or allocation fails the
+//! test instead of exhausting the machine, and is killed after 60 s.
+#![cfg(unix)]
+
+use std::io::Read as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_nc-conform");
+
+/// The address-space limit of every run, KiB (512 MiB).
+const MEMORY_KIB: u64 = 512 * 1024;
+/// The time limit of every run.
+const TIME_LIMIT: Duration = Duration::from_secs(60);
+
+/// A fresh directory for one test's files, removed when dropped.
+struct Dir(PathBuf);
+
+impl Dir {
+    fn new(name: &str) -> Dir {
+        static N: AtomicU32 = AtomicU32::new(0);
+        let n = N.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("nc-conform-hostile-{}-{n}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("create test dir");
+        Dir(dir)
+    }
+
+    fn file(&self, name: &str, text: impl AsRef<[u8]>) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::write(&p, text).expect("write test file");
+        p
+    }
+}
+
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// How a hostile run ended.
+struct Ended {
+    code: i32,
+    #[allow(dead_code)]
+    stdout: Vec<u8>,
+    stderr: String,
+}
+
+impl Ended {
+    /// The first line on stderr.
+    fn first(&self) -> &str {
+        self.stderr.lines().next().unwrap_or("")
+    }
+}
+
+/// Runs the binary bounded in memory and time, with `env` set, in `dir`.
+fn run_in(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Ended {
+    let mut cmd = Command::new("sh");
+    cmd.arg("-c").arg(format!("ulimit -v {MEMORY_KIB}; exec \"$0\" \"$@\"")).arg(BIN).args(args);
+    cmd.env_remove("NC_CONFORM_MAX_PROGRAM_MIB").env_remove("NC_CONFORM_MAX_PROGRAM_LINES");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let mut child = cmd
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start nc-conform");
+    let mut out = child.stdout.take().expect("stdout");
+    let mut err = child.stderr.take().expect("stderr");
+    let reader = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = out.read_to_end(&mut v);
+        v
+    });
+    let err_reader = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = err.read_to_end(&mut v);
+        v
+    });
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            break s;
+        }
+        if start.elapsed() > TIME_LIMIT {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("nc-conform {args:?} ran longer than {TIME_LIMIT:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let stdout = reader.join().expect("stdout reader");
+    let stderr = String::from_utf8_lossy(&err_reader.join().expect("stderr reader")).into_owned();
+    let code = status.code().unwrap_or_else(|| panic!("nc-conform {args:?} killed by a signal: {stderr}"));
+    Ended { code, stdout, stderr }
+}
+
+/// Runs a hostile command: it must end with `code` and a first stderr line holding `says`.
+fn hostile(dir: &Path, args: &[&str], code: i32, says: &str) -> Ended {
+    let e = run_in(dir, args, &[]);
+    assert!(!e.stderr.contains("panicked") && !e.stderr.contains("overflow"), "{args:?}: {}", e.stderr);
+    assert_eq!(e.code, code, "{args:?}: exit {} with stderr:\n{}", e.code, e.stderr);
+    assert!(e.first().contains(says), "{args:?}: first stderr line {:?} lacks {says:?}", e.first());
+    e
+}
+
+// ---- 1. Aborts: no recursion whose depth follows the input ---------------------------------
+
+#[test]
+fn deeply_nested_linuxcnc_expressions_are_refused_as_linuxcnc_does() {
+    let d = Dir::new("nesting");
+    let cases = [
+        ("nest.ngc", format!("G0 X{}1{}\nM2\n", "[".repeat(12_000), "]".repeat(12_000))),
+        ("sum.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 100_000].join("+"))),
+        ("sin.ngc", format!("G0 X{}1{}\nM2\n", "sin[".repeat(20_000), "]".repeat(20_000))),
+        ("neg.ngc", format!("G0 X{}1\nM2\n", "-".repeat(100_000))),
+        ("pow.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 50_000].join("**"))),
+    ];
+    for (name, text) in cases {
+        d.file(name, text);
+        hostile(&d.0, &["run", name, "--dialect", "linuxcnc"], 2, &format!("{name}:1:253: Command too long"));
+    }
+}
+
+#[test]
+fn a_vcd_of_deeply_nested_scopes_is_refused() {
+    let d = Dir::new("vcd");
+    d.file("p.nc", "G0 X50 Z0\nM30\n");
+    let vcd = format!(
+        "$timescale 1us $end\n{}{}$enddefinitions $end\n",
+        "$scope module a $end\n".repeat(50_000),
+        "$upscope $end\n".repeat(50_000)
+    );
+    d.file("deep.vcd", vcd);
+    hostile(
+        &d.0,
+        &["check", "p.nc", "--dialect", "gsk-lathe", "--trace", "deep.vcd"],
+        2,
+        "more than 256 nested $scope commands",
+    );
+}
+
+// ---- 1. Unbounded reads: every file has a size cap -----------------------------------------
+
+#[test]
+fn dev_zero_anywhere_a_file_is_read_is_refused_by_its_cap() {
+    let d = Dir::new("zero");
+    d.file("p.nc", "G0 X50 Z0\nM30\n");
+    d.file("z.yaml", "title: z\nrules: [GSK-RT-01]\ndialect: gsk-lathe\nprogram_file: /dev/zero\n");
+    let program_cap = "/dev/zero: larger than the 64 MiB limit for a program; set NC_CONFORM_MAX_PROGRAM_MIB";
+    hostile(&d.0, &["run", "/dev/zero", "--dialect", "gsk-lathe"], 2, program_cap);
+    hostile(&d.0, &["check", "/dev/zero", "--dialect", "gsk-lathe", "--trace", "p.nc"], 2, program_cap);
+    hostile(
+        &d.0,
+        &["run", "z.yaml"],
+        2,
+        "program file /dev/zero: larger than the 64 MiB limit for a program",
+    );
+    let yaml_cap = "/dev/zero: larger than the 4 MiB limit for a YAML file";
+    hostile(&d.0, &["run", "p.nc", "--dialect", "gsk-lathe", "--params", "/dev/zero"], 2, yaml_cap);
+    hostile(&d.0, &["run", "/dev/zero"], 2, "--dialect");
+    let check = ["check", "p.nc", "--dialect", "gsk-lathe", "--trace", "p.nc"];
+    hostile(&d.0, &[&check[..], &["--map", "/dev/zero"]].concat(), 2, yaml_cap);
+    hostile(&d.0, &[&check[..], &["--tolerances", "/dev/zero"]].concat(), 2, yaml_cap);
+    for format in ["jsonl", "shdr", "csv", "vcd"] {
+        let e = run_in(
+            &d.0,
+            &[
+                "check",
+                "p.nc",
+                "--dialect",
+                "gsk-lathe",
+                "--trace",
+                "/dev/zero",
+                "--format",
+                format,
+                "--lenient",
+            ],
+            &[],
+        );
+        assert_eq!(e.code, 2, "--format {format}: {}", e.stderr);
+        assert!(e.first().starts_with("error: /dev/zero"), "--format {format}: {}", e.stderr);
+    }
+    hostile(&d.0, &["run", ".", "--dialect", "gsk-lathe"], 2, "it is a directory");
+}
+
+#[test]
+fn the_program_cap_is_checked_before_reading_and_can_be_raised() {
+    let d = Dir::new("cap");
+    // A sparse 65 MiB file: refused by its size, without reading it.
+    let big = d.0.join("big.nc");
+    let f = std::fs::File::create(&big).expect("create");
+    f.set_len(65 << 20).expect("size");
+    hostile(&d.0, &["run", "big.nc", "--dialect", "gsk-lathe"], 2, "big.nc: larger than the 64 MiB limit");
+    // Raised to 1 GiB: read (and refused for what it holds, NUL bytes, not for its size).
+    let e =
+        run_in(&d.0, &["run", "big.nc", "--dialect", "gsk-lathe"], &[("NC_CONFORM_MAX_PROGRAM_MIB", "1024")]);
+    assert!(!e.first().contains("limit"), "{}", e.stderr);
+    assert!(matches!(e.code, 1 | 2), "{}", e.stderr);
+}
+
+#[test]
+fn a_program_of_too_many_lines_is_refused_and_the_cap_can_be_raised() {
+    let d = Dir::new("lines");
+    d.file("long.nc", "X1\n".repeat(1_000_001));
+    hostile(
+        &d.0,
+        &["run", "long.nc", "--dialect", "gsk-lathe", "--sample-us", "0"],
+        2,
+        "long.nc: 1000001 lines, more than the 1000000 lines allowed for a program; set NC_CONFORM_MAX_PROGRAM_LINES",
+    );
+    let e = run_in(
+        &d.0,
+        &["run", "long.nc", "--dialect", "gsk-lathe", "--sample-us", "0", "--out", "t.jsonl"],
+        &[("NC_CONFORM_MAX_PROGRAM_LINES", "1000001")],
+    );
+    // Read and run (it has no M30: the run ends another way than at the program end).
+    assert!(!e.stderr.contains("lines allowed"), "{}", e.stderr);
+}
