@@ -213,6 +213,13 @@ impl From<&InputError> for Fancy {
     }
 }
 
+/// A parse error of `text` (the file `name`) as an input error at its span.
+pub fn parse_error(name: &str, text: &str, e: &nc_engine::ParseError) -> InputError {
+    let span = Span::from_line_col(text, e.line, e.col, e.len.max(1));
+    let expected = (!e.expected.is_empty()).then(|| e.expected.clone());
+    InputError::at(name, text, span, e.message.clone(), expected)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -284,5 +291,21 @@ mod tests {
         let e = InputError::new("missing.nc", "cannot read: No such file");
         assert_eq!(e.render_plain(), "error: missing.nc: cannot read: No such file\n");
         assert!(e.render_fancy(false).contains("missing.nc: cannot read"));
+    }
+
+    #[test]
+    fn parse_errors_keep_line_col_and_expected() {
+        let text = "G98\n#1=5\n";
+        let e = nc_engine::ParseError {
+            line: 2,
+            col: 1,
+            len: 1,
+            message: "macro".into(),
+            expected: "a word".into(),
+        };
+        let ie = parse_error("p.nc", text, &e);
+        assert_eq!(ie.headline(), "p.nc:2:1: macro; expected a word");
+        let (span, _) = ie.at.unwrap();
+        assert_eq!(&text[span.offset..span.offset + span.len], "#");
     }
 }

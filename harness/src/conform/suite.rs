@@ -63,7 +63,7 @@ pub fn run_one(
     }
     let side = path.with_extension("check.yaml");
     let tolerances =
-        if side.is_file() { crate::cli_check::load_tolerances(&side)? } else { Tolerances::default() };
+        if side.is_file() { crate::input::load_tolerances(&side)? } else { Tolerances::default() };
     let program = match &s.refusal {
         Some((_, _, text)) => text.clone(),
         None => drive::program_text(path, name)?,

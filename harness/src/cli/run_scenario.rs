@@ -6,7 +6,7 @@ use std::fs::File;
 use std::io::{self, Write};
 use std::path::Path;
 
-use crate::cli::{display_name, RunArgs, EXIT_OK, EXIT_RUN_FAILED};
+use super::{display_name, RunArgs, EXIT_OK, EXIT_RUN_FAILED};
 use crate::determinism::{self, Digest};
 use crate::diag::InputError;
 use crate::jsonl::JsonlWriter;

@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use clap::Args;
 
-use crate::cli::{display_name, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
+use super::{display_name, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::conform::process::{split_command, ProcessController};
 use crate::conform::suite::{run_one, scenario_files, SuiteReport};
 use crate::conform::verdict::Status;

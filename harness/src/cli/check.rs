@@ -7,18 +7,19 @@
 //! Exit status: 0 conformant, 1 divergent, 2 input error (command line, scenario, program,
 //! parameters, the recorded file, a map or tolerance file, an unwritable report).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::builder::PossibleValuesParser;
 use clap::Args;
 use nc_engine::trace::TraceEvent;
 use nc_engine::{Machine, RunOptions};
 
+use super::{display_name, parse_error, run_scenario, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::check::{self, report, Anchor, CheckSpec, Tolerances};
-use crate::cli::{display_name, parse_error, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::diag::InputError;
 use crate::import::{self, ColumnMap, Format, ImportError};
-use crate::{cli_scenario, params_yaml, scenario::load};
+use crate::input::{load_tolerances, read_utf8 as read};
+use crate::{params_yaml, scenario::load};
 
 /// Arguments of `nc-conform check`.
 #[derive(Debug, Args)]
@@ -95,26 +96,10 @@ fn import_error(e: &ImportError) -> InputError {
     ie
 }
 
-fn read(path: &Path) -> Result<String, InputError> {
-    std::fs::read_to_string(path)
-        .map_err(|e| InputError::new(display_name(path), format!("cannot read: {e}")))
-}
-
-/// Reads a tolerance file.
-///
-/// # Errors
-///
-/// Unreadable file, bad YAML, unknown keys (located).
-pub fn load_tolerances(path: &Path) -> Result<Tolerances, InputError> {
-    let text = read(path)?;
-    serde_saphyr::from_str::<Tolerances>(&text)
-        .map_err(|e| InputError::new(display_name(path), format!("bad tolerance file: {e}")))
-}
-
 fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     let input_name = display_name(&args.input);
     // The reference run.
-    let (title, reference, expect, rules, tol_default) = if cli_scenario::is_scenario(&args.input) {
+    let (title, reference, expect, rules, tol_default) = if run_scenario::is_scenario(&args.input) {
         if args.dialect.is_some() || args.params.is_some() {
             return Err(InputError::new(
                 "--dialect/--params",
