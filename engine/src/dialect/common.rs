@@ -3,7 +3,7 @@
 
 use crate::alarm::{Alarm, AlarmKind};
 use crate::exec::{PlantConfig, PlcConfig};
-use crate::params::Params;
+use crate::params::{axis, bit, num, ParamDef, ParamKind::*, Params};
 use crate::parse::{Block, Word};
 use crate::trace::{AXES, AXIS_LETTERS};
 use crate::units::{Decimal, Micros, Nm, NM_PER_INCH, NM_PER_MM};
@@ -50,6 +50,60 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
             zsp_us: ms("plc.zsp_ms"),
         },
     }
+}
+
+/// The `nc.*` / `plc.*` parameter rows that several dialects share, each defined once here (id,
+/// name, type, range, unit, default, text). A dialect's table lists the rows it has, in its own
+/// order; where its machine differs it changes the default, name or text
+/// (`ParamDef { default: 3000.0, ..SPINDLE_MAX_RPM }`), never the id, type, range or unit.
+#[rustfmt::skip]
+pub mod rows {
+    use super::*;
+
+    /// `nc.period_us`.
+    pub const PERIOD_US: ParamDef = num("nc.period_us", "interpolation period", Int, 1000.0, 8000.0, 1000.0, "us", "Interpolation period: 1000, 2000, 4000 or 8000.");
+    /// `nc.increment_nm` (each dialect says which value is its default).
+    pub const INCREMENT_NM: ParamDef = num("nc.increment_nm", "least input increment", Int, 100.0, 1000.0, 1000.0, "nm", "1000 (0.001 mm) or 100 (0.0001 mm).");
+    /// `nc.dpi`.
+    pub const DPI: ParamDef = bit("nc.dpi", "calculator decimal point", 1.0, "1: a word without decimal point is in mm (X50 = 50 mm); 0: in least input increments.");
+    /// `nc.backlash_mm`.
+    pub const BACKLASH_MM: ParamDef = axis("nc.backlash_mm", "backlash", 0.0, 2.0, 0.0, "mm", "Backlash of each axis, compensated on every reversal.");
+    /// `nc.rapid_mm_min`.
+    pub const RAPID_MM_MIN: ParamDef = axis("nc.rapid_mm_min", "rapid rate", 1.0, 240000.0, 6000.0, "mm/min", "Rapid traverse rate per axis (X as radius).");
+    /// `nc.rapid_ramp_ms`.
+    pub const RAPID_RAMP_MS: ParamDef = axis("nc.rapid_ramp_ms", "rapid time constant", 0.0, 4000.0, 100.0, "ms", "Time to reach the rapid rate.");
+    /// `nc.feed_max_mm_min`.
+    pub const FEED_MAX_MM_MIN: ParamDef = num("nc.feed_max_mm_min", "max cutting feed", Real, 1.0, 240000.0, 6000.0, "mm/min", "Upper limit of the cutting feed.");
+    /// `nc.feed_ramp_ms`.
+    pub const FEED_RAMP_MS: ParamDef = num("nc.feed_ramp_ms", "cutting time constant", Int, 0.0, 4000.0, 100.0, "ms", "Time to reach the maximum cutting feed.");
+    /// `nc.dry_run_mm_min`.
+    pub const DRY_RUN_MM_MIN: ParamDef = num("nc.dry_run_mm_min", "dry run feed", Real, 1.0, 240000.0, 2000.0, "mm/min", "Feed of cutting moves under dry run.");
+    /// `nc.spindle_max_rpm`.
+    pub const SPINDLE_MAX_RPM: ParamDef = num("nc.spindle_max_rpm", "max spindle speed", Int, 1.0, 60000.0, 6000.0, "rpm", "Spindle speed limit.");
+    /// `nc.spindle_ramp_ms`.
+    pub const SPINDLE_RAMP_MS: ParamDef = num("nc.spindle_ramp_ms", "spindle time constant", Int, 0.0, 20000.0, 1000.0, "ms", "Time from 0 to the maximum spindle speed.");
+    /// `nc.orient_ms` (each dialect says what the time covers).
+    pub const ORIENT_MS: ParamDef = num("nc.orient_ms", "orientation time", Int, 0.0, 20000.0, 500.0, "ms", "Spindle orientation time.");
+    /// `plc.fin_ms`.
+    pub const FIN_MS: ParamDef = num("plc.fin_ms", "FIN delay", Int, 0.0, 10000.0, 16.0, "ms", "Strobe to FIN.");
+    /// `plc.fin_fall_ms`.
+    pub const FIN_FALL_MS: ParamDef = num("plc.fin_fall_ms", "FIN fall delay", Int, 0.0, 10000.0, 8.0, "ms", "Strobe falling to FIN falling.");
+    /// `plc.fin_timeout_ms`.
+    pub const FIN_TIMEOUT_MS: ParamDef = num("plc.fin_timeout_ms", "FIN timer", Int, 1.0, 600000.0, 10000.0, "ms", "No FIN within this time: alarm NC-1020.");
+    /// `plc.zsp_ms`.
+    pub const ZSP_MS: ParamDef = num("plc.zsp_ms", "zero-speed detection time", Int, 0.0, 10000.0, 8.0, "ms", "The spindle must stay stopped this long before the drive reports zero speed (ZSP).");
+    /// `plc.sppos_request_ms` (rigid tapping with M29).
+    pub const SPPOS_REQUEST_MS: ParamDef = num("plc.sppos_request_ms", "position-mode request delay", Int, 0.0, 10000.0, 8.0, "ms", "M29 strobe to the position-mode request to the drive.");
+    /// `plc.sppos_reach_ms` (rigid tapping with M29).
+    pub const SPPOS_REACH_MS: ParamDef = num("plc.sppos_reach_ms", "drive answer delay", Int, 0.0, 10000.0, 50.0, "ms", "Position-mode request to the drive's reached answer.");
+    /// `plc.rgtap_ms` (rigid tapping with M29).
+    pub const RGTAP_MS: ParamDef = num("plc.rgtap_ms", "RGTAP delay", Int, 0.0, 10000.0, 8.0, "ms", "Reached answer to RGTAP and FIN.");
+    /// `plc.rgtap_fall_ms` (rigid tapping with M29).
+    pub const RGTAP_FALL_MS: ParamDef = num("plc.rgtap_fall_ms", "RGTAP fall delay", Int, 0.0, 10000.0, 16.0, "ms", "F76.3 falling to RGTAP falling.");
+    /// `plc.m29_timeout_ms` (rigid tapping with M29).
+    pub const M29_TIMEOUT_MS: ParamDef = num("plc.m29_timeout_ms", "M29 answer timer", Int, 1.0, 600000.0, 2000.0, "ms", "No reached answer within this time after the request: alarm 5002.");
+    /// `plc.spindle_stall_ms` (rigid tapping with M29).
+    pub const SPINDLE_STALL_MS: ParamDef = num("plc.spindle_stall_ms", "stall timer", Int, 100.0, 600000.0, 100.0, "ms", "Spindle not rotating while rigid tapping commands it for this long: alarm 5074.");
 }
 
 /// The words of one block by letter, G and M codes listed apart; a letter written twice (other
@@ -270,4 +324,24 @@ pub fn speed_s(w: &Words, max: u32) -> Result<Option<u32>, Alarm> {
 /// A tool word T: a whole number 0..99999999.
 pub fn tool_t(w: &Words) -> Result<Option<u32>, Alarm> {
     Ok(w.int_in('T', 0, 99_999_999, "tool number")?.map(|v| v as u32))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::dialect::ALL;
+
+    /// A parameter id that several dialects have means one thing: same type, range, unit and
+    /// shape in every table (only the default, name and text may differ).
+    #[test]
+    fn shared_parameter_ids_agree_across_dialects() {
+        let mut seen = std::collections::BTreeMap::new();
+        for d in ALL {
+            for p in d.param_table() {
+                let shape = (p.kind, p.min.to_bits(), p.max.to_bits(), p.unit, p.per_axis);
+                let first = seen.entry(p.id).or_insert((d.name(), shape));
+                assert_eq!(first.1, shape, "{} differs between {} and {}", p.id, first.0, d.name());
+            }
+        }
+        assert!(seen.len() > 20);
+    }
 }

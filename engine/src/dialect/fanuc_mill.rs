@@ -5,6 +5,7 @@
 
 mod interp;
 
+use super::common::rows::*;
 use crate::dialect::{Dialect, Interpreter};
 use crate::exec::PlantConfig;
 use crate::params::{axis, bit, num, ParamDef, ParamKind::*, Params};
@@ -47,21 +48,21 @@ pub static PARAMS: &[ParamDef] = &[
     num("5241", "rigid max speed", Int, 1.0, 60000.0, 4000.0, "rpm", "Maximum S in rigid tapping (above: alarm 0200)."),
     num("5261", "rigid time constant", Int, 0.0, 4000.0, 200.0, "ms", "Shared time constant of spindle and tap axis at 5241 (scaled by S/max)."),
     bit("nc.tap_spindle_check", "tap spindle check", 1.0, "1: conventional G84/G74 with the spindle not turning in the cutting direction (or S0) raise NC-1017 (seed 003 step 0); 0: no check, they run feeding at F."),
-    num("nc.period_us", "interpolation period", Int, 1000.0, 8000.0, 1000.0, "us", "Interpolation period: 1000, 2000, 4000 or 8000."),
-    num("nc.increment_nm", "least input increment", Int, 100.0, 1000.0, 1000.0, "nm", "1000 (IS-B, 0.001 mm) or 100 (IS-C)."),
-    num("nc.spindle_ramp_ms", "spindle time constant", Int, 0.0, 20000.0, 1000.0, "ms", "Time from 0 to the maximum spindle speed."),
-    num("nc.orient_ms", "orientation time", Int, 0.0, 20000.0, 500.0, "ms", "Spindle orientation (M19) time: its FIN comes then, or when the spindle is at rest if later (0: instant)."),
+    PERIOD_US,
+    ParamDef { doc: "1000 (IS-B, 0.001 mm) or 100 (IS-C).", ..INCREMENT_NM },
+    SPINDLE_RAMP_MS,
+    ParamDef { doc: "Spindle orientation (M19) time: its FIN comes then, or when the spindle is at rest if later (0: instant).", ..ORIENT_MS },
     num("nc.tool_change_ms", "tool change time", Int, 0.0, 60000.0, 2000.0, "ms", "M06: strobe to FIN."),
-    num("plc.fin_ms", "FIN delay", Int, 0.0, 10000.0, 16.0, "ms", "Strobe to FIN."),
-    num("plc.fin_fall_ms", "FIN fall delay", Int, 0.0, 10000.0, 8.0, "ms", "Strobe falling to FIN falling."),
-    num("plc.sppos_request_ms", "position-mode request delay", Int, 0.0, 10000.0, 8.0, "ms", "M29 strobe to the position-mode request to the drive."),
-    num("plc.sppos_reach_ms", "drive answer delay", Int, 0.0, 10000.0, 50.0, "ms", "Position-mode request to the drive's reached answer."),
-    num("plc.rgtap_ms", "RGTAP delay", Int, 0.0, 10000.0, 8.0, "ms", "Reached answer to RGTAP and FIN."),
-    num("plc.rgtap_fall_ms", "RGTAP fall delay", Int, 0.0, 10000.0, 16.0, "ms", "F76.3 falling to RGTAP falling."),
-    num("plc.m29_timeout_ms", "M29 answer timer", Int, 1.0, 600000.0, 2000.0, "ms", "No reached answer within this time after the request: alarm 5002."),
-    num("plc.fin_timeout_ms", "FIN timer", Int, 1.0, 600000.0, 10000.0, "ms", "No FIN within this time: alarm NC-1020."),
-    num("plc.zsp_ms", "zero-speed detection time", Int, 0.0, 10000.0, 8.0, "ms", "The spindle must stay stopped this long before the drive reports zero speed (ZSP)."),
-    num("plc.spindle_stall_ms", "stall timer", Int, 100.0, 600000.0, 100.0, "ms", "Spindle not rotating while rigid tapping commands it for this long: alarm 5074."),
+    FIN_MS,
+    FIN_FALL_MS,
+    SPPOS_REQUEST_MS,
+    SPPOS_REACH_MS,
+    RGTAP_MS,
+    RGTAP_FALL_MS,
+    M29_TIMEOUT_MS,
+    FIN_TIMEOUT_MS,
+    ZSP_MS,
+    SPINDLE_STALL_MS,
 ];
 
 impl Dialect for FanucMill {

@@ -8,9 +8,10 @@
 mod cycle832;
 mod interp;
 
+use super::common::rows::*;
 use crate::dialect::{Dialect, Interpreter};
 use crate::exec::PlantConfig;
-use crate::params::{axis, bit, num, ParamDef, ParamKind::*, Params};
+use crate::params::{bit, num, ParamDef, ParamKind::*, Params};
 use crate::parse::{LexRules, ParseError, Program};
 use crate::trace::AxisSpec;
 
@@ -31,19 +32,19 @@ static AXES: [AxisSpec; 2] = [
 pub static PARAMS: &[ParamDef] = &[
     num("hei.flank_angle_deg", "thread flank angle", Real, 0.0, 90.0, 30.0, "deg", "Flank angle of the thread profile (half the thread angle: 30 for a 60° ISO metric thread). An infeed angle Q467 above it raises NC-1074 (seed 004 caution)."),
     bit("hei.neg_diameter_alarm", "negative diameter check", 1.0, "1: cycle 832 called with the tool at a negative diameter raises NC-1075; 0: the cycle runs, Q471 acting reversed (seed 004 caution)."),
-    axis("nc.backlash_mm", "backlash", 0.0, 2.0, 0.0, "mm", "Backlash of each axis, compensated on reversals of rapid moves."),
-    num("nc.period_us", "interpolation period", Int, 1000.0, 8000.0, 1000.0, "us", "Interpolation period: 1000, 2000, 4000 or 8000."),
-    axis("nc.rapid_mm_min", "rapid rate", 1.0, 240000.0, 6000.0, "mm/min", "Rapid traverse rate per axis (X as radius)."),
-    axis("nc.rapid_ramp_ms", "rapid time constant", 0.0, 4000.0, 100.0, "ms", "Time to reach the rapid rate."),
-    num("nc.feed_max_mm_min", "max cutting feed", Real, 1.0, 240000.0, 6000.0, "mm/min", "Upper limit of the cutting feed; a thread pass faster than it raises NC-1077."),
-    num("nc.feed_ramp_ms", "cutting time constant", Int, 0.0, 4000.0, 100.0, "ms", "Time to reach the maximum cutting feed (thread passes accelerate within Q465, stop within Q466)."),
-    num("nc.dry_run_mm_min", "dry run feed", Real, 1.0, 240000.0, 2000.0, "mm/min", "Feed of L moves with F under dry run (not of thread passes)."),
-    num("nc.spindle_max_rpm", "max spindle speed", Int, 1.0, 60000.0, 3000.0, "rpm", "Spindle speed limit."),
-    num("nc.spindle_ramp_ms", "spindle time constant", Int, 0.0, 20000.0, 1000.0, "ms", "Time from 0 to the maximum spindle speed."),
-    num("plc.fin_ms", "FIN delay", Int, 0.0, 10000.0, 16.0, "ms", "Strobe to FIN."),
-    num("plc.fin_fall_ms", "FIN fall delay", Int, 0.0, 10000.0, 8.0, "ms", "Strobe falling to FIN falling."),
-    num("plc.fin_timeout_ms", "FIN timer", Int, 1.0, 600000.0, 10000.0, "ms", "No FIN within this time: alarm NC-1020."),
-    num("plc.zsp_ms", "zero-speed detection time", Int, 0.0, 10000.0, 8.0, "ms", "The spindle must stay stopped this long before the drive reports zero speed (ZSP)."),
+    ParamDef { doc: "Backlash of each axis, compensated on reversals of rapid moves.", ..BACKLASH_MM },
+    PERIOD_US,
+    RAPID_MM_MIN,
+    RAPID_RAMP_MS,
+    ParamDef { doc: "Upper limit of the cutting feed; a thread pass faster than it raises NC-1077.", ..FEED_MAX_MM_MIN },
+    ParamDef { doc: "Time to reach the maximum cutting feed (thread passes accelerate within Q465, stop within Q466).", ..FEED_RAMP_MS },
+    ParamDef { doc: "Feed of L moves with F under dry run (not of thread passes).", ..DRY_RUN_MM_MIN },
+    ParamDef { default: 3000.0, ..SPINDLE_MAX_RPM },
+    SPINDLE_RAMP_MS,
+    FIN_MS,
+    FIN_FALL_MS,
+    FIN_TIMEOUT_MS,
+    ZSP_MS,
 ];
 
 impl Dialect for Heidenhain {

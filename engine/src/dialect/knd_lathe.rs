@@ -7,9 +7,10 @@
 
 mod interp;
 
+use super::common::rows::*;
 use crate::dialect::{Dialect, Interpreter};
 use crate::exec::PlantConfig;
-use crate::params::{axis, bit, num, ParamDef, ParamKind::*, Params};
+use crate::params::{bit, num, ParamDef, ParamKind::*, Params};
 use crate::parse::LexRules;
 use crate::trace::AxisSpec;
 
@@ -29,24 +30,24 @@ static AXES: [AxisSpec; 2] = [
 /// the backlash or the timers, which are the project's `nc.*` / `plc.*` model (DEC-50).
 pub static PARAMS: &[ParamDef] = &[
     bit("003.RVDL", "RVDL", 1.0, "1: a reversal of the tap axis in G93 takes up its backlash first (the tap stands while the spindle turns); 0: G93 does not compensate backlash (seed 001 note 5)."),
-    axis("nc.backlash_mm", "backlash", 0.0, 2.0, 0.0, "mm", "Backlash of each axis, compensated on every reversal (G93: see 003.RVDL)."),
+    ParamDef { doc: "Backlash of each axis, compensated on every reversal (G93: see 003.RVDL).", ..BACKLASH_MM },
     num("nc.spindle_brake_ms", "spindle brake time", Int, 1.0, 60000.0, 300.0, "ms", "Time the braked spindle takes from its speed to rest; the G93 tap follows it meanwhile (seed 001 notes 6, 10)."),
     num("nc.g93_allowance_mm", "G93 overshoot allowance", Real, 0.001, 1000.0, 50.0, "mm", "How far past the end point the braking G93 tap may go (seed 001 note 10: 50 mm); beyond: NC-1050."),
     num("nc.g93_zsp_timeout_ms", "G93 zero-speed timer", Int, 1.0, 600000.0, 5000.0, "ms", "No zero speed (ZSP) this long after a G93 stop: NC-1051 (the tap would never retract)."),
-    num("nc.period_us", "interpolation period", Int, 1000.0, 8000.0, 1000.0, "us", "Interpolation period: 1000, 2000, 4000 or 8000."),
-    num("nc.increment_nm", "least input increment", Int, 100.0, 1000.0, 1000.0, "nm", "1000 (0.001 mm) or 100 (0.0001 mm)."),
-    bit("nc.dpi", "calculator decimal point", 1.0, "1: a word without decimal point is in mm (Z50 = 50 mm); 0: in least input increments."),
-    axis("nc.rapid_mm_min", "rapid rate", 1.0, 240000.0, 6000.0, "mm/min", "Rapid traverse rate per axis (X as radius)."),
-    axis("nc.rapid_ramp_ms", "rapid time constant", 0.0, 4000.0, 100.0, "ms", "Time to reach the rapid rate."),
-    num("nc.feed_max_mm_min", "max cutting feed", Real, 1.0, 240000.0, 6000.0, "mm/min", "Upper limit of the cutting feed (seed 001 names parameter P25 for it)."),
-    num("nc.feed_ramp_ms", "cutting time constant", Int, 0.0, 4000.0, 100.0, "ms", "Time to reach the maximum cutting feed."),
-    num("nc.dry_run_mm_min", "dry run feed", Real, 1.0, 240000.0, 2000.0, "mm/min", "Feed of cutting moves under dry run."),
-    num("nc.spindle_max_rpm", "max spindle speed", Int, 1.0, 60000.0, 3000.0, "rpm", "Spindle speed limit."),
-    num("nc.spindle_ramp_ms", "spindle time constant", Int, 0.0, 20000.0, 1000.0, "ms", "Time from 0 to the maximum spindle speed (speed mode; the G93 return follows it)."),
-    num("plc.fin_ms", "FIN delay", Int, 0.0, 10000.0, 16.0, "ms", "Strobe to FIN."),
-    num("plc.fin_fall_ms", "FIN fall delay", Int, 0.0, 10000.0, 8.0, "ms", "Strobe falling to FIN falling."),
-    num("plc.fin_timeout_ms", "FIN timer", Int, 1.0, 600000.0, 10000.0, "ms", "No FIN within this time: alarm NC-1020."),
-    num("plc.zsp_ms", "zero-speed detection time", Int, 0.0, 10000.0, 8.0, "ms", "The spindle must stay stopped this long before the drive reports zero speed (ZSP)."),
+    PERIOD_US,
+    INCREMENT_NM,
+    ParamDef { doc: "1: a word without decimal point is in mm (Z50 = 50 mm); 0: in least input increments.", ..DPI },
+    RAPID_MM_MIN,
+    RAPID_RAMP_MS,
+    ParamDef { doc: "Upper limit of the cutting feed (seed 001 names parameter P25 for it).", ..FEED_MAX_MM_MIN },
+    FEED_RAMP_MS,
+    DRY_RUN_MM_MIN,
+    ParamDef { default: 3000.0, ..SPINDLE_MAX_RPM },
+    ParamDef { doc: "Time from 0 to the maximum spindle speed (speed mode; the G93 return follows it).", ..SPINDLE_RAMP_MS },
+    FIN_MS,
+    FIN_FALL_MS,
+    FIN_TIMEOUT_MS,
+    ZSP_MS,
 ];
 
 impl Dialect for KndLathe {

@@ -14,9 +14,10 @@ mod interp;
 mod machine;
 mod ngc;
 
+use super::common::rows::*;
 use crate::dialect::{Dialect, Interpreter};
 use crate::exec::PlantConfig;
-use crate::params::{axis, num, ParamDef, ParamKind::*, Params};
+use crate::params::{num, ParamDef, ParamKind::*, Params};
 use crate::parse::{Block, LexRules, ParseError, Program};
 use crate::trace::AxisSpec;
 
@@ -36,20 +37,20 @@ static AXES: [AxisSpec; 3] = [
 /// settings have no numbers; DEC-80).
 pub static PARAMS: &[ParamDef] = &[
     num("nc.rigid_overshoot_pitches", "G33.1 overshoot allowance", Real, 0.1, 100.0, 10.0, "pitches", "How far past the end point the G33.1 tap may follow the reversing spindle, in pitches (LinuxCNC: 10); beyond: NC-1097."),
-    num("nc.period_us", "interpolation period", Int, 1000.0, 8000.0, 1000.0, "us", "Servo period: 1000, 2000, 4000 or 8000 (LinuxCNC SERVO_PERIOD)."),
-    axis("nc.rapid_mm_min", "rapid rate", 1.0, 240000.0, 6000.0, "mm/min", "Rapid rate per axis (MAX_VELOCITY)."),
-    axis("nc.rapid_ramp_ms", "rapid time constant", 0.0, 4000.0, 100.0, "ms", "Time to reach the rapid rate (from MAX_ACCELERATION)."),
-    axis("nc.backlash_mm", "backlash", 0.0, 2.0, 0.0, "mm", "Backlash of each axis, compensated on every reversal."),
-    num("nc.feed_max_mm_min", "max cutting feed", Real, 1.0, 240000.0, 6000.0, "mm/min", "Upper limit of the cutting feed."),
-    num("nc.feed_ramp_ms", "cutting time constant", Int, 0.0, 4000.0, 100.0, "ms", "Time to reach the maximum cutting feed."),
-    num("nc.dry_run_mm_min", "dry run feed", Real, 1.0, 240000.0, 2000.0, "mm/min", "Feed of cutting moves under dry run."),
-    num("nc.spindle_max_rpm", "max spindle speed", Int, 1.0, 60000.0, 6000.0, "rpm", "Spindle speed limit."),
-    num("nc.spindle_ramp_ms", "spindle time constant", Int, 0.0, 20000.0, 1000.0, "ms", "Time from 0 to the maximum spindle speed; the G33.1 reversal follows it."),
-    num("nc.orient_ms", "orientation time", Int, 0.0, 20000.0, 500.0, "ms", "Spindle orientation (G87) time."),
-    num("plc.fin_ms", "M function delay", Int, 0.0, 10000.0, 0.0, "ms", "M/S/T function to its completion (LinuxCNC does not wait for a FIN: 0)."),
-    num("plc.fin_fall_ms", "M function fall delay", Int, 0.0, 10000.0, 0.0, "ms", "Strobe falling to completion falling."),
-    num("plc.fin_timeout_ms", "M function timer", Int, 1.0, 600000.0, 10000.0, "ms", "No completion within this time: NC-1020."),
-    num("plc.zsp_ms", "zero-speed detection time", Int, 0.0, 10000.0, 8.0, "ms", "The spindle must stay stopped this long before zero speed is reported."),
+    ParamDef { doc: "Servo period: 1000, 2000, 4000 or 8000 (LinuxCNC SERVO_PERIOD).", ..PERIOD_US },
+    ParamDef { doc: "Rapid rate per axis (MAX_VELOCITY).", ..RAPID_MM_MIN },
+    ParamDef { doc: "Time to reach the rapid rate (from MAX_ACCELERATION).", ..RAPID_RAMP_MS },
+    BACKLASH_MM,
+    FEED_MAX_MM_MIN,
+    FEED_RAMP_MS,
+    DRY_RUN_MM_MIN,
+    SPINDLE_MAX_RPM,
+    ParamDef { doc: "Time from 0 to the maximum spindle speed; the G33.1 reversal follows it.", ..SPINDLE_RAMP_MS },
+    ParamDef { doc: "Spindle orientation (G87) time.", ..ORIENT_MS },
+    ParamDef { name: "M function delay", default: 0.0, doc: "M/S/T function to its completion (LinuxCNC does not wait for a FIN: 0).", ..FIN_MS },
+    ParamDef { name: "M function fall delay", default: 0.0, doc: "Strobe falling to completion falling.", ..FIN_FALL_MS },
+    ParamDef { name: "M function timer", doc: "No completion within this time: NC-1020.", ..FIN_TIMEOUT_MS },
+    ParamDef { doc: "The spindle must stay stopped this long before zero speed is reported.", ..ZSP_MS },
 ];
 
 impl Dialect for Linuxcnc {
