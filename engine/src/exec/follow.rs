@@ -7,7 +7,7 @@
 
 use super::motion::Path;
 use super::plc::PlcAction;
-use super::profile::Profile;
+use super::profile::{Profile, Ramp};
 use super::{Active, AfterAwait, Exec};
 use crate::alarm::{Alarm, AlarmKind};
 use crate::plan::{Follow, FollowKind, Step};
@@ -33,19 +33,23 @@ impl Exec<'_> {
                 if d == 0 && b == 0.0 {
                     return;
                 }
-                // The axis runs at lead × the spindle's speed within the cutting acceleration; a
-                // single-axis profile with its backlash first (the spindle keeps its own state).
+                // The axis catches up with lead × the spindle's speed within the cutting
+                // acceleration, then stays locked to it and reaches the end point still at that
+                // speed: the brake that follows carries it on with the spindle (no stop at Z while
+                // the spindle turns). A single-axis profile with its backlash first (the spindle
+                // keeps its own state); a spindle still ramping is followed through its ramp.
                 let vmax = self.cfg.feed_max_nm_min / 60e6;
                 let v = (rpm.abs() * lead / 60e6).min(vmax);
                 let a = vmax / self.cfg.feed_ramp_us.max(1) as f64;
                 let mut profiles = [Profile::still(); AXES];
                 let mut backlash = [0.0; AXES];
                 let dist = d.unsigned_abs() as f64 + b;
-                // A spindle still ramping (just started): the axis follows its encoder through
-                // the ramp (COM-MOT-02's closed form).
-                profiles[f.axis] = match self.spindle.ramp(now) {
-                    Some(ramp) => Profile::following(dist, lead / 60e6, ramp, vmax, a, period)
-                        .unwrap_or_else(|| Profile::trapezoid(dist, v, a, period)),
+                let ramp = self.spindle.ramp(now).unwrap_or(Ramp { rpm0: rpm, slope: 0.0, dur: 0.0 });
+                profiles[f.axis] = match Profile::following_through(dist, lead / 60e6, ramp, vmax, a) {
+                    Some((p, v_end)) => {
+                        self.follow_v = Some(v_end);
+                        p
+                    }
                     None => Profile::trapezoid(dist, v, a, period),
                 };
                 backlash[f.axis] = b;
@@ -57,11 +61,15 @@ impl Exec<'_> {
                 if rpm == 0.0 {
                     return;
                 }
-                let total = ceil_to(brake_us.max(1), period.max(1));
-                let v0 = rpm.abs() * lead / 60e6;
+                // The spindle brakes for its brake time from wherever the cut reached the end
+                // point; the control sees it stopped on the tick after.
+                let total = brake_us.max(1);
+                let tick = ceil_to(now + total, period.max(1)) - now;
+                // From the speed the cut reached the end point with (locked: lead × speed).
+                let v0 = self.follow_v.take().unwrap_or(rpm.abs() * lead / 60e6);
                 let coast = 0.5 * v0 * total as f64;
                 let room = d.unsigned_abs() as f64;
-                let (profile, over) = Profile::braking(v0, total, room, period);
+                let (profile, over) = Profile::braking(v0, total, room, period, tick);
                 let travel = profile.dist.round() as Nm;
                 if over && f.encoder_bound {
                     // Cut short at the allowance: the spindle goes on braking from its speed

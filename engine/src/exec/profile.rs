@@ -134,14 +134,18 @@ impl Profile {
     /// Braking from `v0` nm/µs to rest in `total` µs at constant deceleration, cut short where
     /// the distance reaches `room` nm (at the end of that period of `period`). Returns the
     /// profile and whether it was cut short (the coast would have gone past `room`).
-    pub fn braking(v0: f64, total: Micros, room: f64, period: Micros) -> (Profile, bool) {
+    ///
+    /// A brake not cut short stands still from `total` until `end` µs (≥ `total`: the tick on
+    /// which the control sees the stop).
+    pub fn braking(v0: f64, total: Micros, room: f64, period: Micros, end: Micros) -> (Profile, bool) {
         let total_f = total.max(1) as f64;
         let a = v0 / total_f;
         let coast = 0.5 * v0 * total_f;
         let mut pieces = [NO_PIECE; MAX_PIECES];
         pieces[0] = Piece { t0: 0.0, s0: 0.0, v0, a: -a };
         if coast <= room || v0 <= 0.0 {
-            return (Profile { pieces, n: 1, dist: coast, total: total.max(1) }, false);
+            pieces[1] = Piece { t0: total_f, s0: coast, v0: 0.0, a: 0.0 };
+            return (Profile { pieces, n: 2, dist: coast, total: end.max(total.max(1)) }, false);
         }
         // s(t) = v0·t − a·t²/2 = room: the earlier root.
         let disc = (v0 * v0 - 2.0 * a * room).max(0.0);
