@@ -48,6 +48,8 @@ pub struct Limits {
     pub spindle_accel: f64,
     /// Spindle acceleration in position mode, rpm/µs (rigid maximum / rigid time constant).
     pub rigid_accel: f64,
+    /// Deceleration of a braked spindle, rpm/µs (maximum speed / brake time; 0: no brake).
+    pub spindle_brake: f64,
 }
 
 impl Limits {
@@ -70,6 +72,11 @@ impl Limits {
             spindle_max_rpm: c.spindle_max_rpm.max(c.rigid_max_rpm) as f64,
             spindle_accel: c.spindle_max_rpm as f64 / c.spindle_ramp_us.max(1) as f64,
             rigid_accel: c.rigid_max_rpm as f64 / c.rigid_ramp_us.max(1) as f64,
+            spindle_brake: if c.spindle_brake_us > 0 {
+                c.spindle_max_rpm as f64 / c.spindle_brake_us as f64
+            } else {
+                0.0
+            },
         }
     }
 
@@ -169,11 +176,15 @@ pub fn check(trace: &Trace, lim: &Limits, tap: Option<TapSpec>) -> Vec<Violation
                     if dt > 0.0 {
                         // The spindle: speed, ramp, angle.
                         let (r0, r1) = (p.spindle_mrpm as f64 / 1000.0, s.spindle_mrpm as f64 / 1000.0);
-                        let a_sp = if stroke || rigid {
+                        let mut a_sp = if stroke || rigid {
                             lim.spindle_accel.max(lim.rigid_accel)
                         } else {
                             lim.spindle_accel
                         };
+                        if r1.abs() < r0.abs() && r0 * r1 >= 0.0 {
+                            // Slowing down: a braked spindle may use its brake.
+                            a_sp = a_sp.max(lim.spindle_brake);
+                        }
                         if r1.abs() > lim.spindle_max_rpm * (1.0 + 1e-9) + 0.002 {
                             found(violation(
                                 Invariant::SpindleRamp,
