@@ -60,10 +60,33 @@ fn check(path: &Path, rel: &str) -> Result<(), Failed> {
         settings.bind(|| insta::assert_snapshot!(format!("{name}.events"), events))
     }));
     let snap = timing.and(listing);
-    if !outcome.passed() {
+    // Physical plausibility (INV-11..INV-14) runs in every scenario. A scenario listed in
+    // `physics_open.txt` has a known violation not fixed yet (owner and reason there): its physics
+    // verdicts may fail, and once they all hold the listing must go (a ratchet).
+    let physics = |v: &&nc_conform::scenario::expect::Verdict| {
+        !v.pass && ["INV-11", "INV-12", "INV-13", "INV-14"].contains(&v.rule.as_str())
+    };
+    let open = physics_open().contains(&rel.to_string());
+    let broken = outcome.verdicts.iter().filter(physics).count();
+    if open && broken == 0 {
+        return Err(
+            format!("{rel}: listed in harness/tests/physics_open.txt but physics holds: remove it").into()
+        );
+    }
+    let tolerated = |v: &&nc_conform::scenario::expect::Verdict| v.pass || (open && physics(v));
+    if !outcome.verdicts.iter().all(|v| tolerated(&v)) {
         return Err(format!("{}\n{}", s.title, outcome.failures()).into());
     }
     snap.map_err(|_| Failed::from(format!("{rel}: a snapshot differs from the reviewed one (see above)")))
+}
+
+/// The scenarios with a known, reported physics violation (`physics_open.txt`: path, then why).
+fn physics_open() -> Vec<String> {
+    include_str!("physics_open.txt")
+        .lines()
+        .map(|l| l.split('#').next().unwrap_or("").trim().to_string())
+        .filter(|l| !l.is_empty())
+        .collect()
 }
 
 fn main() {

@@ -31,6 +31,7 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         backlash_nm,
         spindle_max_rpm: p.get("nc.spindle_max_rpm") as u32,
         spindle_ramp_us: ms("nc.spindle_ramp_ms"),
+        spindle_brake_us: 0,
         rigid_max_rpm: p.get("nc.rt_max_rpm") as u32,
         rigid_ramp_us: ms("nc.rt_ramp_ms"),
         hold_in_rigid_tap: false,

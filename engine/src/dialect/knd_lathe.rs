@@ -64,7 +64,10 @@ impl Dialect for KndLathe {
         PARAMS
     }
     fn plant_config(&self, p: &Params) -> PlantConfig {
-        super::common::plant_config(p, "nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm")
+        let mut c = super::common::plant_config(p, "nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm");
+        // The G93 brake: the physics invariants judge a braking spindle by it (INV-12).
+        c.spindle_brake_us = (p.get("nc.spindle_brake_ms") * 1000.0) as crate::units::Micros;
+        c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {
         Box::new(interp::KndInterp::new(params))

@@ -49,6 +49,9 @@ pub struct PlantConfig {
     pub spindle_max_rpm: u32,
     /// Spindle acceleration time constant (0 → maximum speed), µs.
     pub spindle_ramp_us: Micros,
+    /// Spindle brake time (a braked spindle from its speed to rest, KND `nc.spindle_brake_ms`),
+    /// µs; 0: the spindle has no brake and slows down at its ramp.
+    pub spindle_brake_us: Micros,
     /// Maximum spindle speed in rigid tapping, rpm.
     pub rigid_max_rpm: u32,
     /// Rigid tapping time constant at `rigid_max_rpm` (scaled by S / max: constant acceleration), µs.

@@ -7,7 +7,7 @@
 
 use super::motion::Path;
 use super::plc::PlcAction;
-use super::profile::Profile;
+use super::profile::{Profile, Ramp};
 use super::{Active, AfterAwait, Exec};
 use crate::alarm::{Alarm, AlarmKind};
 use crate::plan::{Follow, FollowKind, Step};
@@ -33,19 +33,23 @@ impl Exec<'_> {
                 if d == 0 && b == 0.0 {
                     return;
                 }
-                // The axis runs at lead × the spindle's speed within the cutting acceleration; a
-                // single-axis profile with its backlash first (the spindle keeps its own state).
+                // The axis catches up with lead × the spindle's speed within the cutting
+                // acceleration, then stays locked to it and reaches the end point still at that
+                // speed: the brake that follows carries it on with the spindle (no stop at Z while
+                // the spindle turns). A single-axis profile with its backlash first (the spindle
+                // keeps its own state); a spindle still ramping is followed through its ramp.
                 let vmax = self.cfg.feed_max_nm_min / 60e6;
                 let v = (rpm.abs() * lead / 60e6).min(vmax);
                 let a = vmax / self.cfg.feed_ramp_us.max(1) as f64;
                 let mut profiles = [Profile::still(); AXES];
                 let mut backlash = [0.0; AXES];
                 let dist = d.unsigned_abs() as f64 + b;
-                // A spindle still ramping (just started): the axis follows its encoder through
-                // the ramp (COM-MOT-02's closed form).
-                profiles[f.axis] = match self.spindle.ramp(now) {
-                    Some(ramp) => Profile::following(dist, lead / 60e6, ramp, vmax, a, period)
-                        .unwrap_or_else(|| Profile::trapezoid(dist, v, a, period)),
+                let ramp = self.spindle.ramp(now).unwrap_or(Ramp { rpm0: rpm, slope: 0.0, dur: 0.0 });
+                profiles[f.axis] = match Profile::following_through(dist, lead / 60e6, ramp, vmax, a) {
+                    Some((p, v_end)) => {
+                        self.follow_v = Some(v_end);
+                        p
+                    }
                     None => Profile::trapezoid(dist, v, a, period),
                 };
                 backlash[f.axis] = b;
@@ -57,24 +61,30 @@ impl Exec<'_> {
                 if rpm == 0.0 {
                     return;
                 }
-                let total = ceil_to(brake_us.max(1), period.max(1));
-                let v0 = rpm.abs() * lead / 60e6;
-                let coast = 0.5 * v0 * total as f64;
+                // The spindle brakes on its own in speed mode (its brake time from its speed at
+                // the end point); the tap brakes behind it within its own acceleration, from the
+                // speed the cut reached the end point with (locked: lead × speed). Where the brake
+                // would carry it past the allowance it leaves the spindle just in time to stop
+                // there, and the spindle brakes on (KND-G93-05).
+                let total = brake_us.max(1);
+                let v0 = self.follow_v.take().unwrap_or(rpm.abs() * lead / 60e6);
+                let a_spindle = rpm.abs() * lead / 60e6 / total as f64;
+                let a_axis = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
                 let room = d.unsigned_abs() as f64;
-                let (profile, over) = Profile::braking(v0, total, room, period);
+                let coast = v0 * v0 / (2.0 * a_spindle.min(a_axis));
+                let (profile, over) = Profile::brake_behind(v0, a_spindle, a_axis, room);
+                // The control sees the stop on the tick after the tap and the spindle are still.
+                let rest = profile.total.max(if over { 0 } else { total });
+                let profile = profile.still_until(ceil_to(now + rest, period.max(1)) - now);
                 let travel = profile.dist.round() as Nm;
-                if over && f.encoder_bound {
-                    // Cut short at the allowance: the spindle goes on braking from its speed
-                    // there (KND-G93-05).
-                    let left = 1.0 - profile.total as f64 / total as f64;
-                    self.coast = Some((now + profile.total, rpm * left, rpm.abs() / total as f64));
-                }
                 target[f.axis] = self.cmd[f.axis] + d.signum() * travel;
-                self.spindle.hold(now, angle);
+                self.spindle.command(now, 0.0);
+                self.spindle.seg_accel = Some(rpm.abs() / total as f64);
                 self.stall_angle = None;
-                let spin = rpm.signum();
-                self.start_motion(target, Path::Tap { profile, axis: f.axis, backlash: 0.0, lead, spin });
-                self.free_spindle();
+                self.spindle_changed();
+                let mut profiles = [Profile::still(); AXES];
+                profiles[f.axis] = profile;
+                self.start_motion(target, Path::Rapid { profiles, backlash: [0.0; AXES] });
                 self.following = f.encoder_bound && self.motion.is_some();
                 if over {
                     let a = Alarm::new(
@@ -97,9 +107,13 @@ impl Exec<'_> {
                 let r = (r as f64 * self.spindle_override as f64 / 100.0)
                     .min(self.cfg.spindle_max_rpm as f64)
                     .max(1.0);
-                let v = r * lead / 60e6;
+                // The tap and the spindle locked together, within both limits: the spindle's ramp
+                // (× lead) and the axis' own acceleration and feed limit.
+                let vmax = self.cfg.feed_max_nm_min / 60e6;
+                let v = (r * lead / 60e6).min(vmax);
                 let a_rpm = self.cfg.spindle_max_rpm.max(1) as f64 / self.cfg.spindle_ramp_us.max(1) as f64;
-                let profile = Profile::trapezoid(d.unsigned_abs() as f64 + b, v, a_rpm * lead / 60e6, period);
+                let a = (a_rpm * lead / 60e6).min(vmax / self.cfg.feed_ramp_us.max(1) as f64);
+                let profile = Profile::trapezoid(d.unsigned_abs() as f64 + b, v, a, period);
                 self.spindle.hold(now, angle);
                 self.stall_angle = None;
                 // The spindle is in speed mode: machine lock holds the axis, not the spindle

@@ -17,7 +17,8 @@ impl Exec<'_> {
             PlcAction::Set(sig, v) => {
                 self.set_signal(sig, v);
                 let rtap = self.signals.get(Signal::Rtap);
-                self.plc.react(self.now, sig, v, rtap);
+                let rest = self.spindle_rest();
+                self.plc.react(self.now, sig, v, rtap, rest);
                 self.check_await();
             }
             PlcAction::M29Timer(n) => {

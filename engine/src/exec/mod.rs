@@ -132,6 +132,8 @@ pub(crate) struct Exec<'a> {
     /// A braking coast cut short at the allowance (NC-1050): when it ends (µs), the spindle's
     /// speed then (signed rpm) and its braking deceleration (rpm/µs).
     coast: Option<(Micros, f64, f64)>,
+    /// The speed (nm/µs) a following cut reached its end point with, for the brake after it.
+    follow_v: Option<f64>,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -209,6 +211,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         css: None,
         following: false,
         coast: None,
+        follow_v: None,
     };
     ex.main_loop();
 }
@@ -414,7 +417,8 @@ impl Exec<'_> {
                     self.advance_to(t);
                     self.set_signal(sig, v);
                     let rtap = self.signals.get(Signal::Rtap);
-                    self.plc.react(self.now, sig, v, rtap);
+                    let rest = self.spindle_rest();
+                    self.plc.react(self.now, sig, v, rtap, rest);
                 }
                 Some(plc::PlcAction::ZeroSpeed) => {
                     self.advance_to(t);
@@ -426,6 +430,14 @@ impl Exec<'_> {
                 None => break,
             }
         }
+    }
+
+    /// When the spindle comes to rest: the end of its ramp to a stop in speed mode, else now.
+    fn spindle_rest(&self) -> Micros {
+        if self.motion.as_ref().is_some_and(|m| m.spindle(self.now).is_some()) || self.spindle.target != 0.0 {
+            return self.now;
+        }
+        self.spindle.ramp_end().max(self.now)
     }
 
     /// Machine positions (physical) at `t`.

@@ -120,13 +120,17 @@ impl Plc {
         self.at(now + self.cfg.rgtap_fall_us, PlcAction::Set(Signal::Sppos, false));
     }
 
-    /// The drive or ladder reacts to an edge it sees.
-    pub fn react(&mut self, now: Micros, sig: Signal, v: bool, rtap: bool) {
+    /// The drive or ladder reacts to an edge it sees. `spindle_rest` is when the spindle's
+    /// present ramp to a stop ends (or `now` when it stands): the drive reports position mode
+    /// `sppos_reach_us` after SPPOS, but never before the spindle has come down at its ramp and
+    /// switched to position control (seed 000's timing chart; issue 12: it used to answer while
+    /// the spindle still turned at 2604 rpm). The M29 timer still counts from SPPOS.
+    pub fn react(&mut self, now: Micros, sig: Signal, v: bool, rtap: bool, spindle_rest: Micros) {
         match (sig, v) {
             (Signal::Sppos, true) => {
                 self.answer(
                     now,
-                    self.cfg.sppos_reach_us,
+                    spindle_rest.saturating_sub(now).max(self.cfg.sppos_reach_us),
                     PlcAnswer::PositionModeReached,
                     PlcAction::Set(Signal::Spposa, true),
                 );

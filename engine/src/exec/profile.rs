@@ -131,23 +131,68 @@ impl Profile {
         Profile { pieces, n: 1, dist, total }
     }
 
-    /// Braking from `v0` nm/µs to rest in `total` µs at constant deceleration, cut short where
-    /// the distance reaches `room` nm (at the end of that period of `period`). Returns the
-    /// profile and whether it was cut short (the coast would have gone past `room`).
-    pub fn braking(v0: f64, total: Micros, room: f64, period: Micros) -> (Profile, bool) {
-        let total_f = total.max(1) as f64;
-        let a = v0 / total_f;
-        let coast = 0.5 * v0 * total_f;
+    /// A tap braking behind its spindle from `v0` nm/µs: it follows the spindle's deceleration
+    /// `a_follow` nm/µs² where its own limit `a_axis` allows (else decelerates at `a_axis`), and
+    /// when that would carry it past `room` nm it leaves the spindle just in time to stop at
+    /// `room` at `a_axis` (past `room` only when even that cannot stop it in time). Returns the
+    /// profile (ending on the µs it stops) and whether it was cut short.
+    pub fn brake_behind(v0: f64, a_follow: f64, a_axis: f64, room: f64) -> (Profile, bool) {
+        let a_ax = if a_axis > 0.0 && a_axis.is_finite() { a_axis } else { 1e12 };
+        let a_b = if a_follow > 0.0 && a_follow.is_finite() { a_follow.min(a_ax) } else { a_ax };
         let mut pieces = [NO_PIECE; MAX_PIECES];
-        pieces[0] = Piece { t0: 0.0, s0: 0.0, v0, a: -a };
-        if coast <= room || v0 <= 0.0 {
-            return (Profile { pieces, n: 1, dist: coast, total: total.max(1) }, false);
+        if v0 <= 0.0 {
+            return (Profile::still(), false);
         }
-        // s(t) = v0·t − a·t²/2 = room: the earlier root.
-        let disc = (v0 * v0 - 2.0 * a * room).max(0.0);
-        let t = (v0 - disc.sqrt()) / a;
-        let end = ceil_to((t.ceil() as Micros).max(1), period.max(1)).min(total.max(1));
-        (Profile { pieces, n: 1, dist: room, total: end }, true)
+        let coast = v0 * v0 / (2.0 * a_b);
+        pieces[0] = Piece { t0: 0.0, s0: 0.0, v0, a: -a_b };
+        if coast <= room {
+            let total = ((v0 / a_b).ceil() as Micros).max(1);
+            return (Profile { pieces, n: 1, dist: coast, total }, false);
+        }
+        // g(t) = s(t) + v(t)²/(2·a_ax), non-decreasing: the latest t with g(t) ≤ room.
+        let g = |t: f64| {
+            let v = v0 - a_b * t;
+            v0 * t - 0.5 * a_b * t * t + v * v / (2.0 * a_ax)
+        };
+        let (mut lo, mut hi) = (0.0, v0 / a_b);
+        if g(0.0) < room {
+            for _ in 0..100 {
+                let mid = 0.5 * (lo + hi);
+                if g(mid) <= room {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+        }
+        let t1 = lo;
+        let v1 = v0 - a_b * t1;
+        let s1 = v0 * t1 - 0.5 * a_b * t1 * t1;
+        pieces[1] = Piece { t0: t1, s0: s1, v0: v1, a: -a_ax };
+        let dist = s1 + v1 * v1 / (2.0 * a_ax);
+        let total = ((t1 + v1 / a_ax).ceil() as Micros).max(1);
+        (Profile { pieces, n: 2, dist, total }, true)
+    }
+
+    /// The same motion standing still at its end until `end` µs (the tick on which the control
+    /// sees it stopped).
+    pub fn still_until(mut self, end: Micros) -> Profile {
+        if end <= self.total || self.n >= MAX_PIECES {
+            return self;
+        }
+        let t = self.total as f64;
+        let (s, v) = {
+            let p = &self.pieces[self.n - 1];
+            let dt = t - p.t0;
+            (p.s0 + p.v0 * dt + 0.5 * p.a * dt * dt, (p.v0 + p.a * dt).max(0.0))
+        };
+        if v > 1e-9 {
+            return self;
+        }
+        self.pieces[self.n] = Piece { t0: t, s0: s.min(self.dist), v0: 0.0, a: 0.0 };
+        self.n += 1;
+        self.total = end;
+        self
     }
 
     fn offset(mut self, s0: f64) -> Profile {

@@ -26,6 +26,9 @@ pub struct Spindle {
     pub position_mode: bool,
     /// Stalled: does not turn whatever is commanded.
     pub stalled: bool,
+    /// An orientation from rest: a turn of this many degrees (signed) from rest to rest in this
+    /// many µs, accelerating then decelerating evenly (the spindle's own acceleration at most).
+    pub glide: Option<(f64, f64)>,
 }
 
 impl Spindle {
@@ -40,6 +43,7 @@ impl Spindle {
             seg_accel: None,
             position_mode: false,
             stalled: false,
+            glide: None,
         }
     }
 
@@ -49,6 +53,18 @@ impl Spindle {
             return (self.angle0, 0.0);
         }
         let dt = t.saturating_sub(self.t0) as f64;
+        if let Some((d, total)) = self.glide {
+            if dt >= total {
+                return (self.angle0 + d, 0.0);
+            }
+            let u = dt / total;
+            let (f, slope) = if u < 0.5 {
+                (2.0 * u * u, 4.0 * u)
+            } else {
+                (1.0 - 2.0 * (1.0 - u) * (1.0 - u), 4.0 * (1.0 - u))
+            };
+            return (self.angle0 + f * d, slope * d / total / DEG_PER_US_PER_RPM);
+        }
         let dv = self.target - self.rpm0;
         let accel = self.seg_accel.unwrap_or(self.accel);
         let ramp = if accel.is_finite() && accel > 0.0 { dv.abs() / accel } else { 0.0 };
@@ -72,17 +88,29 @@ impl Spindle {
         self.rpm0 = now;
         self.target = rpm;
         self.seg_accel = None;
+        self.glide = None;
     }
 
     /// Orientation (M19) from `t`: a turning spindle decelerates at its own acceleration, a little
     /// less where needed, so as to come to rest exactly on the next whole turn in its direction
-    /// of rotation; a spindle at rest (or `orient_us` 0: an instant orientation) is put on the
-    /// next whole turn at once. Returns when the orientation is complete: `orient_us` after `t`,
+    /// of rotation; a spindle at rest turns forward onto the next whole turn, accelerating then
+    /// decelerating at its own acceleration (never a jump: issue 12, INV-13; `orient_us` 0 no
+    /// longer makes it instant). Returns when the orientation is complete: `orient_us` after `t`,
     /// or when the spindle has come to rest if that is later.
     pub fn orient(&mut self, t: Micros, orient_us: Micros) -> Micros {
         let (angle, rpm) = self.at(t);
         let whole = |a: f64| (a / 360.0).ceil() * 360.0;
-        if rpm == 0.0 || orient_us == 0 {
+        if rpm == 0.0 {
+            // From rest: turn forward onto the next whole turn, accelerating then decelerating at
+            // the spindle's own acceleration (never a jump of the angle).
+            let d = whole(angle) - angle;
+            self.hold(t, angle);
+            let a = self.accel * DEG_PER_US_PER_RPM;
+            if d > 1e-9 && a.is_finite() && a > 0.0 {
+                let total = 2.0 * (d / a).sqrt();
+                self.glide = Some((d, total));
+                return (t + total.ceil() as Micros).max(t + orient_us);
+            }
             self.hold(t, whole(angle));
             return t + orient_us;
         }
@@ -100,6 +128,7 @@ impl Spindle {
         self.angle0 = angle;
         self.rpm0 = rpm;
         self.target = 0.0;
+        self.glide = None;
         self.seg_accel = Some(v * v / (2.0 * d) / DEG_PER_US_PER_RPM);
         let rest = t + (2.0 * d / v).ceil() as Micros;
         rest.max(t + orient_us)
@@ -112,6 +141,7 @@ impl Spindle {
         self.rpm0 = 0.0;
         self.target = 0.0;
         self.seg_accel = None;
+        self.glide = None;
     }
 
     /// The speed ramp under way at `t` (signed speed now, signed acceleration rpm/µs, time left
@@ -120,6 +150,9 @@ impl Spindle {
         let accel = self.seg_accel.unwrap_or(self.accel);
         let (_, rpm) = self.at(t);
         let dv = self.target - rpm;
+        if self.glide.is_some_and(|(_, total)| (t.saturating_sub(self.t0) as f64) < total) {
+            return None;
+        }
         if self.stalled || dv == 0.0 || !accel.is_finite() || accel <= 0.0 {
             return None;
         }
@@ -128,6 +161,9 @@ impl Spindle {
 
     /// When the present ramp ends (the speed is steady from then on).
     pub fn ramp_end(&self) -> Micros {
+        if let Some((_, total)) = self.glide {
+            return self.t0 + total.ceil() as Micros;
+        }
         let dv = (self.target - self.rpm0).abs();
         let accel = self.seg_accel.unwrap_or(self.accel);
         if dv == 0.0 || !accel.is_finite() || accel <= 0.0 {
@@ -181,10 +217,16 @@ mod tests {
         r.orient(200_000, 500_000);
         let (a, _) = r.at(r.ramp_end());
         assert!((a / 360.0 - (a / 360.0).round()).abs() < 1e-9 && a < -900.0, "{a}");
+        // At rest it turns onto the next whole turn at its own acceleration, never jumping.
         let mut z = Spindle::new(0.01);
         z.hold(0, 10.0);
         assert_eq!(z.orient(0, 500_000), 500_000);
-        assert_eq!(z.at(1).0, 360.0);
+        let (a, rpm) = z.at(z.ramp_end() / 2);
+        assert!((a - 185.0).abs() < 0.2 && rpm > 0.0, "{a} {rpm}");
+        let (a, rpm) = z.at(z.ramp_end());
+        assert!((a - 360.0).abs() < 1e-9 && rpm == 0.0, "{a} {rpm}");
+        // 350° at 0.01 rpm/µs (6e-8 °/µs²): 2·√(350/6e-8) µs.
+        assert_eq!(z.ramp_end(), (2.0 * (350.0f64 / 6e-8).sqrt()).ceil() as Micros);
     }
 
     #[test]

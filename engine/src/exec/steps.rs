@@ -152,10 +152,10 @@ impl Exec<'_> {
                 }
             }
             Step::Orient => {
-                let (a, _) = self.spindle.at(now);
-                let done = ceil_to(now + self.cfg.orient_us, self.cfg.period_us);
-                self.spindle.hold(done, (a / 360.0).ceil() * 360.0);
-                self.active = Active::Until(done);
+                // Onto the next whole turn at the spindle's own acceleration (issue 12: it used
+                // to jump there): complete after the orientation time, or at rest if later.
+                let rest = self.spindle.orient(now, self.cfg.orient_us);
+                self.active = Active::Until(ceil_to(rest, self.cfg.period_us));
             }
             Step::Stop { optional } => {
                 if !optional || self.optional_stop {

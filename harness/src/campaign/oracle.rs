@@ -60,6 +60,8 @@ pub fn check_run(
         Err(v) => return (None, vec![v]),
     };
     let mut violations = invariants::check(&trace, ctx);
+    // Physical plausibility (INV-11..INV-14) on every run, under the machine's own limits.
+    violations.extend(invariants::physics::check(&trace, &invariants::physics::Limits::of(m), ctx.tap));
     match run_guarded(m, program, opts) {
         Ok(again) => violations.extend(invariants::deterministic(&trace, &again)),
         Err(v) => violations.push(v),

@@ -3,8 +3,8 @@
 //! out-of-range word) and an optional comparison run. Regression scenarios written by the property
 //! campaigns use it; any scenario may.
 
-use nc_engine::invariants::{Context, Invariant, RangeAlarm, TapSpec};
-use nc_engine::{AlarmKind, Machine, Program, RunOptions};
+use nc_engine::invariants::{physics, Context, Invariant, RangeAlarm, TapSpec};
+use nc_engine::{AlarmKind, Machine, Program, RunOptions, Trace};
 use serde::Deserialize;
 use serde_saphyr::Spanned;
 
@@ -149,9 +149,31 @@ pub fn evaluate(check: &InvariantCheck, m: &Machine, program: &Program, opts: &R
         Invariant::TapSync => c.tap.is_some(),
         Invariant::HoldDeferredInTapping => c.hold_suppressed,
         Invariant::DryRunKeepsTapFeed => matches!(check.compare, Some(CompareRun::DryRunAt(_))),
+        // Checked on every scenario by `run::run` (INV-11..INV-14).
+        i if Invariant::PHYSICS.contains(i) => false,
         _ => true,
     });
     asked
+        .map(|inv| {
+            let v = violations.iter().find(|v| v.invariant == inv);
+            Verdict {
+                rule: inv.id().to_string(),
+                what: format!("invariant {}", inv.name()),
+                pass: v.is_none(),
+                t_us: v.map(|v| v.t_us),
+                expected: format!("{} holds", inv.name()),
+                actual: v.map_or_else(|| "it holds".to_string(), |v| v.detail.clone()),
+            }
+        })
+        .collect()
+}
+
+/// One verdict per physics invariant (INV-11..INV-14) on `trace`, under `m`'s own limits.
+pub fn physics_verdicts(trace: &Trace, m: &Machine, tap: Option<TapSpec>) -> Vec<Verdict> {
+    let violations = physics::check(trace, &physics::Limits::of(m), tap);
+    Invariant::PHYSICS
+        .into_iter()
+        .filter(|i| *i != Invariant::FollowsSpindle || tap.is_some())
         .map(|inv| {
             let v = violations.iter().find(|v| v.invariant == inv);
             Verdict {

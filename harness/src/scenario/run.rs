@@ -70,6 +70,11 @@ pub fn run(s: &Scenario) -> Outcome {
     if let (Some(check), None) = (&s.invariants, &s.refusal) {
         verdicts.extend(super::invariants::evaluate(check, &s.machine, &s.program, &s.opts));
     }
+    if s.refusal.is_none() {
+        // Physical plausibility holds in every scenario, asked for or not (INV-11..INV-14).
+        let tap = s.invariants.as_ref().and_then(|c| c.ctx.tap);
+        verdicts.extend(super::invariants::physics_verdicts(&trace, &s.machine, tap));
+    }
     Outcome { trace, verdicts }
 }
 

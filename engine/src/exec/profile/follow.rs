@@ -101,6 +101,55 @@ impl Profile {
     }
 }
 
+impl Profile {
+    /// A move of `dist` nm locked to the spindle that does not stop at its end: from rest it
+    /// catches up with `per_rpm` × |the spindle's speed| (capped at `vmax`) within the
+    /// acceleration `a`, then follows it, and ends on the µs where it has covered `dist`, still
+    /// at speed (the move after it carries on from there: a following tap braking with its
+    /// spindle). Not stretched to whole periods: stretching would unlock it from the spindle.
+    /// Returns the profile and its speed at the end (nm/µs); None when the spindle comes to rest
+    /// before the distance is covered.
+    pub fn following_through(
+        dist: f64,
+        per_rpm: f64,
+        ramp: Ramp,
+        vmax: f64,
+        a: f64,
+    ) -> Option<(Profile, f64)> {
+        if dist <= 0.0 {
+            return Some((Profile::still(), 0.0));
+        }
+        let a = if a > 0.0 && a.is_finite() { a } else { 1e12 };
+        let pieces = follow(&command(per_rpm, ramp, vmax), a);
+        for (k, p) in pieces.iter().enumerate() {
+            let len = pieces.get(k + 1).map_or(f64::INFINITY, |q| q.t0 - p.t0);
+            let s_at = |dt: f64| p.s0 + p.v0 * dt + 0.5 * p.a * dt * dt;
+            let reach = if len.is_finite() { s_at(len) >= dist } else { p.v0 > 0.0 || p.a > 0.0 };
+            if !reach {
+                continue;
+            }
+            // s0 + v0·dt + a·dt²/2 = dist: the earlier root.
+            let c = dist - p.s0;
+            let dt = if p.a.abs() < 1e-18 {
+                c / p.v0
+            } else {
+                let disc = (p.v0 * p.v0 + 2.0 * p.a * c).max(0.0);
+                2.0 * c / (p.v0 + disc.sqrt())
+            };
+            let end = p.t0 + dt.max(0.0);
+            let v_end = (p.v0 + p.a * dt).max(0.0);
+            if k + 1 > MAX_PIECES || !end.is_finite() {
+                return None;
+            }
+            let mut out = [NO_PIECE; MAX_PIECES];
+            out[..=k].copy_from_slice(&pieces[..=k]);
+            let total = (end.ceil() as Micros).max(1);
+            return Some((Profile { pieces: out, n: k + 1, dist, total }, v_end));
+        }
+        None
+    }
+}
+
 /// The speed command `min(per_rpm × |rpm(t)|, vmax)`, linear by pieces; the last piece is constant.
 fn command(per_rpm: f64, r: Ramp, vmax: f64) -> Vec<Cmd> {
     let rpm = |t: f64| r.rpm0 + r.slope * t.min(r.dur);

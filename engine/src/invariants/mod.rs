@@ -7,6 +7,8 @@
 //! lead of the tap, the alarm an out-of-range word must raise) comes in a [`Context`] from whoever
 //! wrote the program.
 
+pub mod physics;
+
 use crate::alarm::AlarmKind;
 use crate::trace::{Event, Phase, Sample, Signal, Signals, Trace, AXES};
 use crate::units::{Micros, Nm};
@@ -36,11 +38,19 @@ pub enum Invariant {
     OverloadNeverDeeper,
     /// INV-10: the same inputs give the same trace.
     Deterministic,
+    /// INV-11: no axis exceeds its speed limit or its acceleration ([`physics`]).
+    AxisLimits,
+    /// INV-12: no spindle speed change exceeds its ramp, no speed its maximum ([`physics`]).
+    SpindleRamp,
+    /// INV-13: the spindle's angle advances by the integral of its speed ([`physics`]).
+    SpindleAngleIntegral,
+    /// INV-14: an axis following a spindle in speed mode never runs ahead of lead × its speed.
+    FollowsSpindle,
 }
 
 impl Invariant {
     /// Every invariant, in id order.
-    pub const ALL: [Invariant; 10] = [
+    pub const ALL: [Invariant; 14] = [
         Invariant::NoPanic,
         Invariant::TimeOrderedEnds,
         Invariant::RangeAlarmNoMotion,
@@ -51,6 +61,18 @@ impl Invariant {
         Invariant::ResetRestoresSpindle,
         Invariant::OverloadNeverDeeper,
         Invariant::Deterministic,
+        Invariant::AxisLimits,
+        Invariant::SpindleRamp,
+        Invariant::SpindleAngleIntegral,
+        Invariant::FollowsSpindle,
+    ];
+
+    /// The physics family (INV-11..INV-14), checked by [`physics::check`] on every run.
+    pub const PHYSICS: [Invariant; 4] = [
+        Invariant::AxisLimits,
+        Invariant::SpindleRamp,
+        Invariant::SpindleAngleIntegral,
+        Invariant::FollowsSpindle,
     ];
 
     /// The id (`INV-04`).
@@ -66,6 +88,10 @@ impl Invariant {
             Invariant::ResetRestoresSpindle => "INV-08",
             Invariant::OverloadNeverDeeper => "INV-09",
             Invariant::Deterministic => "INV-10",
+            Invariant::AxisLimits => "INV-11",
+            Invariant::SpindleRamp => "INV-12",
+            Invariant::SpindleAngleIntegral => "INV-13",
+            Invariant::FollowsSpindle => "INV-14",
         }
     }
 
@@ -82,6 +108,10 @@ impl Invariant {
             Invariant::ResetRestoresSpindle => "reset_restores_spindle",
             Invariant::OverloadNeverDeeper => "overload_never_deeper",
             Invariant::Deterministic => "deterministic",
+            Invariant::AxisLimits => "axis_limits",
+            Invariant::SpindleRamp => "spindle_ramp",
+            Invariant::SpindleAngleIntegral => "spindle_angle_integral",
+            Invariant::FollowsSpindle => "follows_spindle",
         }
     }
 
