@@ -7,7 +7,7 @@
 
 mod support;
 
-use nc_engine::input::{Input, InputSchedule};
+use nc_engine::input::{Condition, Input, InputSchedule};
 use nc_engine::trace::{Event, Phase, Trace};
 use nc_engine::RunOptions;
 use support::run;
@@ -132,24 +132,18 @@ fn check_accelerated(ps: &[Pass], lead: f64, phase: impl Fn(usize) -> f64) -> (V
     (waits, lag.unwrap())
 }
 
-#[test]
-fn g923_locked_law_with_variable_lead_from_index_plus_phase() {
-    // Seed 002's example: F4 D0.1, E1 Q0.5 A1: 5 passes started 0, 1/8 .. 4/8 of a turn after
-    // the index; travel after n turns F·n + D·n²/2, i.e. travel per turn sqrt(F² + 2·D·s).
-    let prog = "G0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\nG0 X60;\nM30;\n";
-    let t = run("gsk-lathe", &[], prog, &sampled(InputSchedule::default()));
-    assert_eq!(t.alarms().count(), 0);
-    let ps = passes(&t, 2, 1.0);
-    assert_eq!(ps.len(), 5);
-    let (f, d) = (4.0 * MM, 0.1 * MM);
+/// Locked law with lead `f` and lead change `d`: pass k starts at the first index + `phase(k)`
+/// after its last still sample, and every sample of it is at `f·n + d·n²/2` (n revolutions since
+/// that angle), travel per turn sqrt(f² + 2·d·s), up to `len`.
+fn check_locked(ps: &[Pass], f: f64, d: f64, len: f64, phase: impl Fn(usize) -> f64) {
     let law = |n: f64| f * n + d * n * n / 2.0;
     for (k, p) in ps.iter().enumerate() {
-        let start = next_angle(p.at_phase, k as f64 / 8.0);
+        let start = next_angle(p.still, phase(k));
         assert!(p.still < start && start <= p.moving[0].0, "pass {k}");
         let mut checked = 0;
         for w in p.moving.windows(2) {
             let (r, s) = w[1];
-            if s >= 25.0 * MM - 1.0 {
+            if s >= len - 1.0 {
                 break;
             }
             // The law at every sample: within the quantisation of the sampled angle (1 mdeg).
@@ -167,6 +161,41 @@ fn g923_locked_law_with_variable_lead_from_index_plus_phase() {
         let (r, s) = p.moving[0];
         assert!(s > 0.0 && (s - law(r - start)).abs() < 15.0);
     }
+}
+
+const G923: &str = "G0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\nG0 X60;\nM30;\n";
+
+#[test]
+fn g923_locked_law_with_variable_lead_from_index_plus_phase() {
+    // Seed 002's example: F4 D0.1, E1 Q0.5 A1: 5 passes started 0, 1/8 .. 4/8 of a turn after
+    // the index; travel after n turns F·n + D·n²/2, i.e. travel per turn sqrt(F² + 2·D·s).
+    let t = run("gsk-lathe", &[], G923, &sampled(InputSchedule::default()));
+    assert_eq!(t.alarms().count(), 0);
+    let ps = passes(&t, 2, 1.0);
+    assert_eq!(ps.len(), 5);
+    for (k, p) in ps.iter().enumerate() {
+        // Each pass starts at the first of its start angles after it is reached.
+        let start = next_angle(p.at_phase, k as f64 / 8.0);
+        assert!(p.still < start && start <= p.moving[0].0, "pass {k}");
+    }
+    check_locked(&ps, 4.0 * MM, 0.1 * MM, 25.0 * MM, |k| k as f64 / 8.0);
+}
+
+#[test]
+fn g923_a_feed_hold_during_the_wait_for_the_start_angle_keeps_the_pass_on_its_groove() {
+    // With thread retract on, a feed hold 1 ms into the third pass' cutting phase falls in its wait
+    // for the index + 1/4 turn (no motion to retract): the control holds there; cycle start 0.3 s
+    // later waits for the start angle again (not the one that passed meanwhile).
+    let hold = InputSchedule::default()
+        .when(Condition::Phase(Phase::Cutting), 3, 1000, Input::FeedHold)
+        .when(Condition::Phase(Phase::Cutting), 3, 301_000, Input::CycleStart);
+    let t = run("gsk-lathe", &[("nc.thread_retract", None, 1.0)], G923, &sampled(hold));
+    assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
+    let ps = passes(&t, 2, 1.0);
+    assert_eq!(ps.len(), 5);
+    // The third pass started after the cycle start, at least 0.3 s (2.5 turns at S500) late.
+    assert!(ps[2].moving[0].0 - ps[2].at_phase > 2.5, "{}", ps[2].moving[0].0 - ps[2].at_phase);
+    check_locked(&ps, 4.0 * MM, 0.1 * MM, 25.0 * MM, |k| k as f64 / 8.0);
 }
 
 #[test]
@@ -315,7 +344,7 @@ fn as_before_the_fix(t: &Trace) -> Vec<nc_engine::trace::TraceEvent> {
 fn the_one_executor_gives_the_traces_of_the_two_it_replaced() {
     // Digests of whole traces (1 ms samples) written by `exec/thread.rs` (G92.3) and
     // `exec/thread_832.rs` (cycle 832) before they were folded into one executor.
-    let g923 = "G0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\nG0 X60;\nM30;\n";
+    let g923 = G923;
     let taper = "G0 X40 Z5;\nM03 S400;\nG92.3 X36 Z-10 R-1 I8 E0.5 Q1. A1;\nM30;\n";
     let t = run("gsk-lathe", &[], g923, &sampled(InputSchedule::default()));
     assert_eq!(digest(&as_before_the_fix(&t)), G923_BEFORE);

@@ -48,20 +48,20 @@ impl Exec<'_> {
                 None => v = v.min(vmax),
             }
         }
-        // Revolutions since the start angle (index + phase), in the sense the spindle turns.
+        // Revolutions since the start angle (index + phase), in the sense the spindle turns,
+        // signed: within half a turn either side.
         let turned = angle * rpm.signum() / 360.0 - p.phase_rev;
         let past = turned - turned.floor();
-        if !p.armed && past != 0.0 {
-            // Wait for the start angle: the control arms its index latch when the pass begins.
-            let dt = ((1.0 - past) / rev_us).round() as Micros;
-            if dt > 0 {
-                self.steps.push_front(Step::Thread(ThreadPass { armed: true, ..p }));
-                self.active = Active::Until(now + dt);
-                return;
-            }
-        }
-        // At the start angle (to within the µs the wait was rounded to, either side).
         let n0 = if past > 0.5 { past - 1.0 } else { past };
+        if n0.abs() > rev_us * 0.5 + 1e-9 {
+            // Not at the start angle (to within the µs its instant is rounded to): wait for the
+            // next one. The control arms its index latch when the pass begins: an index that
+            // has passed is not used. Checked again when the wait ends (the speed may change).
+            let dt = ((1.0 - past) / rev_us).round().max(1.0) as Micros;
+            self.steps.push_front(Step::Thread(p));
+            self.active = Active::Until(now + dt);
+            return;
+        }
         let start = self.cmd;
         let (a0, _) = p.knots[0];
         let (a_end, _) = p.knots[p.n - 1];
@@ -96,8 +96,6 @@ impl Exec<'_> {
                 self.backlash(axis, d.signum() as i8);
             }
         }
-        // After a stop the pass is cut again from its start angle.
-        self.motion_step = Some(Step::Thread(ThreadPass { armed: false, ..p }));
         self.start_motion(
             p.target,
             Path::Thread { law, along: p.along, across: p.across, knots, n: p.n, dir, len: dist },

@@ -106,7 +106,6 @@ impl ThreadCycle {
                 .retract_on_hold
                 .then_some(ThreadRetract { cycle_start: self.start, short_axis: self.infeed_axis }),
             alarm: AlarmKind::FeedZero,
-            armed: false,
         }
     }
 }

@@ -135,7 +135,6 @@ impl ThreadCycle {
             law: PassLaw::Accelerated { room: Some((self.approach, self.overrun)) },
             retract: None,
             alarm: AlarmKind::SpindleNotTurning,
-            armed: false,
         }
     }
 

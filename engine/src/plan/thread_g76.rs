@@ -142,7 +142,6 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
             law: PassLaw::Accelerated { room: None },
             retract: None,
             alarm: AlarmKind::FeedZero,
-            armed: false,
         }));
     }
     out.push(Step::HoldSuppress(false));

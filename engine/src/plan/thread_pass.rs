@@ -69,8 +69,6 @@ pub struct ThreadPass {
     pub retract: Option<ThreadRetract>,
     /// Raised when the spindle is not turning when the pass starts.
     pub alarm: AlarmKind,
-    /// Set by the executor once it has waited for the start angle (never set by a planner).
-    pub armed: bool,
 }
 
 impl ThreadPass {
@@ -101,7 +99,6 @@ impl ThreadPass {
             law: PassLaw::Accelerated { room: None },
             retract: None,
             alarm: AlarmKind::FeedZero,
-            armed: false,
         })
     }
 
