@@ -30,16 +30,28 @@ fn moves(text: &str) -> Vec<(char, [f64; 3])> {
     let mut out: Vec<(char, [f64; 3])> = Vec::new();
     let mut last = [0.0; 3];
     for s in expand_all(steps) {
-        let (kind, t) = match s {
-            Step::Rapid { target } => ('T', target),
-            Step::Feed { target, .. } | Step::Arc { target, .. } => ('F', target),
+        let targets = match s {
+            Step::Rapid { target } => vec![('T', target)],
+            Step::Feed { target, .. } | Step::Arc { target, .. } => vec![('F', target)],
+            // A synchronised pass: LinuxCNC's STRAIGHT_FEEDs end at its knots.
+            Step::Thread(p) => p.knots[1..p.n]
+                .iter()
+                .map(|&(a, c)| {
+                    let mut t = p.target;
+                    t[p.along] = a.round() as i64;
+                    t[p.across] = c.round() as i64;
+                    ('F', t)
+                })
+                .collect(),
             _ => continue,
         };
-        let p = [t[0] as f64 / IN, t[1] as f64 / IN, t[2] as f64 / IN];
-        if p != last {
-            out.push((kind, p));
+        for (kind, t) in targets {
+            let p = [t[0] as f64 / IN, t[1] as f64 / IN, t[2] as f64 / IN];
+            if p != last {
+                out.push((kind, p));
+            }
+            last = p;
         }
-        last = p;
     }
     out
 }

@@ -16,7 +16,6 @@ pub mod profile;
 pub mod spindle;
 mod steps;
 mod thread;
-mod thread_832;
 mod triggers;
 
 pub use config::{PlantConfig, PlcConfig};

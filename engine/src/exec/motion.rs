@@ -1,5 +1,5 @@
-//! The axes' motions: rapid (each axis on its own), linear and circular interpolation, and the
-//! synchronised tapping stroke where the tap axis follows the spindle. Positions are evaluated in
+//! The axes' motions: rapid (each axis on its own), linear and circular interpolation, the
+//! synchronised tapping stroke where the tap axis follows the spindle, and the thread pass. Positions are evaluated in
 //! closed form at any time.
 
 use super::profile::Profile;
@@ -58,12 +58,12 @@ pub enum Path {
         /// Spindle direction, +1 forward.
         spin: f64,
     },
-    /// A thread pass: the profile is the travel along the pitch axis; the infeed axis is a
-    /// function of that travel through the knots (the spindle turns on its own in speed mode).
-    ThreadPass {
-        /// Travel profile along the pitch axis, nm.
-        profile: Profile,
-        /// Pitch axis slot.
+    /// A spindle-synchronised thread pass: the drive axis travels as `law` gives; the infeed
+    /// axis is a function of that travel through the knots; other axes move linearly with it.
+    Thread {
+        /// The drive axis' travel against time.
+        law: Law,
+        /// Drive axis slot.
         along: usize,
         /// Infeed axis slot.
         across: usize,
@@ -71,52 +71,52 @@ pub enum Path {
         knots: [(f64, f64); 4],
         /// Knots used.
         n: usize,
-        /// Direction of the travel on the pitch axis, ±1.
+        /// Direction of the travel on the drive axis, ±1.
         dir: f64,
+        /// Travel of the drive axis, nm (> 0).
+        len: f64,
     },
-    /// A thread pass locked to a spindle turning at a steady speed in speed mode: the long axis
-    /// travels `lead·n + dlead·n²/2` after `n` revolutions; every axis moves along the line to
-    /// the end (run-out taken off), the run-out axis adds its run-out over the last part.
-    Thread {
+}
+
+/// How a thread pass' drive axis travels with time.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Law {
+    /// Locked to a spindle turning at a steady speed: `lead·n + dlead·n²/2` after `n`
+    /// revolutions since the start angle.
+    Locked {
         /// Revolutions per µs (> 0).
         rev_us: f64,
-        /// Revolutions the spindle had turned since the pass's index when the motion started
-        /// (the motion starts on a tick, the index falls between ticks).
+        /// Revolutions since the start angle when the motion started (within a µs of 0).
         n0: f64,
         /// Lead at the start, nm/rev.
         lead: f64,
         /// Lead change, nm/rev².
         dlead: f64,
-        /// Travel along the long axis, nm (> 0).
-        len: f64,
-        /// The run-out: axis, extra travel (signed nm), long-axis travel where it begins.
-        runout: Option<(usize, f64, f64)>,
-        /// Duration, µs (whole periods).
+        /// Duration, µs (ends on an interpolation tick).
         total: Micros,
     },
+    /// A profile accelerating to exactly lead × speed, cruising at it, decelerating to the end.
+    Ramped(Profile),
 }
 
-impl Path {
-    /// A thread pass of `len` nm along its long axis at `rev_us` revolutions per µs, starting
-    /// `n0` revolutions after its index: the path, lasting whole periods until the thread's end.
-    pub fn thread(
-        rev_us: f64,
-        n0: f64,
-        lead: f64,
-        dlead: f64,
-        len: f64,
-        runout: Option<(usize, f64, f64)>,
-        period: Micros,
-    ) -> Path {
-        // n where lead·n + dlead·n²/2 = len (the stable form of the quadratic's root).
-        let revs = if dlead == 0.0 {
-            len / lead
-        } else {
-            2.0 * len / (lead + (lead * lead + 2.0 * dlead * len).max(0.0).sqrt())
-        };
-        let left = (revs - n0).max(0.0);
-        let total = crate::units::ceil_to(((left / rev_us).ceil() as Micros).max(1), period.max(1));
-        Path::Thread { rev_us, n0, lead, dlead, len, runout, total }
+impl Law {
+    /// Travel (nm, clamped to `len`) and speed (nm/µs) `dt` µs after the start.
+    pub fn eval(&self, dt: Micros, len: f64) -> (f64, f64) {
+        match self {
+            Law::Locked { rev_us, n0, lead, dlead, total } => {
+                let n = n0 + rev_us * dt.min(*total) as f64;
+                ((lead * n + 0.5 * dlead * n * n).clamp(0.0, len), rev_us * (lead + dlead * n))
+            }
+            Law::Ramped(p) => p.eval(dt),
+        }
+    }
+
+    fn total(&self) -> Micros {
+        match self {
+            Law::Locked { total, .. } => *total,
+            Law::Ramped(p) => p.total,
+        }
     }
 }
 
@@ -147,11 +147,10 @@ impl Motion {
     pub fn duration(&self) -> Micros {
         match &self.path {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.total).max().unwrap_or(0),
-            Path::Line { profile, .. }
-            | Path::Arc { profile, .. }
-            | Path::Tap { profile, .. }
-            | Path::ThreadPass { profile, .. } => profile.total,
-            Path::Thread { total, .. } => *total,
+            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
+                profile.total
+            }
+            Path::Thread { law, .. } => law.total(),
         }
     }
 
@@ -185,14 +184,10 @@ impl Motion {
         let dt = t.saturating_sub(self.t0);
         match &self.path {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.eval(dt).1).fold(0.0, f64::max),
-            Path::Line { profile, .. }
-            | Path::Arc { profile, .. }
-            | Path::Tap { profile, .. }
-            | Path::ThreadPass { profile, .. } => profile.eval(dt).1,
-            Path::Thread { rev_us, n0, lead, dlead, .. } => {
-                let n = n0 + rev_us * dt as f64;
-                rev_us * (lead + dlead * n)
+            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
+                profile.eval(dt).1
             }
+            Path::Thread { law, len, .. } => law.eval(dt, *len).1,
         }
     }
 
@@ -201,7 +196,7 @@ impl Motion {
     pub fn stop_at(&mut self, t: Micros, a: f64, period: Micros) {
         let dt = t.saturating_sub(self.t0);
         let elapsed = dt;
-        if let Path::Thread { .. } = self.path {
+        if let Path::Thread { law: Law::Locked { .. }, .. } = self.path {
             // A thread is locked to the spindle: it cannot run on along a braking profile; the
             // axes stop where they are (a thread retract pulls out from there).
             let here = self.pos_unclamped(t);
@@ -221,8 +216,8 @@ impl Motion {
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
             | Path::Tap { profile, .. }
-            | Path::ThreadPass { profile, .. } => *profile = profile.stop_from(dt, a, period),
-            Path::Thread { .. } => {}
+            | Path::Thread { law: Law::Ramped(profile), .. } => *profile = profile.stop_from(dt, a, period),
+            Path::Thread { law: Law::Locked { .. }, .. } => {}
         }
         // Re-anchor: the new profiles start at `t` and measure from the old start.
         self.t0 += elapsed;
@@ -268,25 +263,11 @@ impl Motion {
                 let s = (profile.eval(dt).0 - backlash).max(0.0);
                 p[*axis] = m.start[*axis] + (d.signum() as f64 * s).round() as Nm;
             }
-            Path::Thread { rev_us, n0, lead, dlead, len, runout, total } => {
-                let n = n0 + rev_us * dt.min(*total) as f64;
-                let s = (lead * n + 0.5 * dlead * n * n).clamp(0.0, *len);
-                let f = s / len;
+            Path::Thread { law, along, across, knots, n, dir, len } => {
+                let s = law.eval(dt, *len).0;
                 for i in 0..AXES {
-                    let ro = match runout {
-                        Some((axis, amount, _)) if *axis == i => *amount,
-                        _ => 0.0,
-                    };
-                    let line = (m.path_end[i] - m.start[i]) as f64 - ro;
-                    p[i] = m.start[i] + (line * f).round() as Nm;
+                    p[i] = m.start[i] + ((m.path_end[i] - m.start[i]) as f64 * s / len).round() as Nm;
                 }
-                if let Some((axis, amount, from)) = runout {
-                    let g = if *len > *from { ((s - from) / (len - from)).clamp(0.0, 1.0) } else { 1.0 };
-                    p[*axis] += (amount * g).round() as Nm;
-                }
-            }
-            Path::ThreadPass { profile, along, across, knots, n, dir } => {
-                let s = profile.eval(dt).0;
                 p[*along] = m.start[*along] + (dir * s).round() as Nm;
                 p[*across] = across_at(&knots[..*n], s).round() as Nm;
             }

@@ -123,7 +123,6 @@ impl Exec<'_> {
                 }
             }
             Step::Follow(f) => self.start_follow(f),
-            Step::ThreadPass(p) => self.start_thread_pass(p),
             Step::AwaitSignal { signal, value, timeout_us, alarm } => {
                 self.start_await(signal, value, timeout_us, alarm)
             }

@@ -10,6 +10,9 @@ pub mod rigid_tap;
 pub mod thread;
 pub mod thread_832;
 pub mod thread_g76;
+pub mod thread_pass;
+
+pub use thread_pass::{PassLaw, ThreadPass, ThreadRetract};
 
 use crate::alarm::{Alarm, AlarmKind};
 use crate::input::CurrentSource;
@@ -157,51 +160,6 @@ pub enum FollowKind {
     },
 }
 
-/// One spindle-synchronised thread pass: the axes follow the spindle (in speed mode) so that the
-/// travel along the long axis is an exact function of the revolutions turned since the pass
-/// started, `lead·n + dlead·n²/2`; the short axis follows the straight (or taper) line, plus the
-/// thread run-out at the end.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ThreadMove {
-    /// End of the thread (run-out included), physical nm.
-    pub target: Pos,
-    /// The axis the lead is measured along (the longer travel).
-    pub long_axis: usize,
-    /// Lead at the start of the pass, nm per revolution (> 0).
-    pub lead_nm: f64,
-    /// Change of the lead per revolution, nm/rev² (signed; 0: constant lead).
-    pub dlead_nm: f64,
-    /// The thread run-out, if any.
-    pub runout: Option<RunOut>,
-    /// Where the pass starts in the spindle's turn: this fraction of a revolution after the
-    /// one-revolution signal (0 ≤ phase < 1).
-    pub phase_rev: f64,
-    /// Feed hold during the pass retracts at once (thread retract) instead of finishing it.
-    pub retract: Option<ThreadRetract>,
-}
-
-/// The thread run-out: over the last `len` nm of the long axis the short axis moves `amount` nm
-/// more (signed, away from the thread), linearly with the long axis.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RunOut {
-    /// The short axis slot.
-    pub axis: usize,
-    /// Its extra travel, nm (signed).
-    pub amount: Nm,
-    /// Length of the run-out along the long axis, nm (> 0).
-    pub len: Nm,
-}
-
-/// Where a thread retract goes on feed hold: the short axis back to the cycle start, then the
-/// long axis; the control then holds, and cycle start cuts the interrupted pass again.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ThreadRetract {
-    /// The cycle's start point.
-    pub cycle_start: Pos,
-    /// The short axis slot (retracted first).
-    pub short_axis: usize,
-}
-
 /// The overload watch of a GSK rigid tapping cycle (word D or parameter 271).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OverloadWatch {
@@ -311,8 +269,9 @@ pub enum Step {
         /// Raised when the timer runs out.
         alarm: AlarmKind,
     },
-    /// A spindle-synchronised thread pass (see [`ThreadMove`]).
-    Thread(ThreadMove),
+    /// A spindle-synchronised thread pass, the one step of every threading cycle (see
+    /// [`ThreadPass`]).
+    Thread(ThreadPass),
     /// Stop and wait for cycle start, as after a feed hold.
     Hold,
     /// A point inside a block where single block stops (the end of one pass of a multi-pass
@@ -324,9 +283,6 @@ pub enum Step {
     /// Feed and spindle overrides held at 100 % (true) or honoured again (false), feed hold
     /// still honoured (LinuxCNC `DISABLE_FEED_OVERRIDE` / `DISABLE_SPEED_OVERRIDE` in G84/G74).
     OverrideLock(bool),
-    /// A thread cutting pass synchronised with the spindle in speed mode: see
-    /// [`thread_832::ThreadPass`].
-    ThreadPass(thread_832::ThreadPass),
 }
 
 /// Most pecks a cycle builder plans at once: a hole of more pecks ends its first chunk with a

@@ -8,7 +8,8 @@
 //!
 //! Knows no G code: the dialect gives lengths in nm and the options as flags.
 
-use super::{More, Pos, RunOut, Step, ThreadMove, ThreadRetract, PECKS_PER_CHUNK};
+use super::{More, PassLaw, Pos, Step, ThreadPass, ThreadRetract, PECKS_PER_CHUNK};
+use crate::alarm::AlarmKind;
 use crate::trace::Phase;
 use crate::units::Nm;
 
@@ -61,23 +62,50 @@ impl ThreadCycle {
         shift / self.lead_nm.max(1) as f64
     }
 
-    /// The thread move of pass `k`.
-    pub fn pass_move(&self, k: u64) -> ThreadMove {
+    /// The cut start: the cycle start with the infeed axis at X end + R.
+    pub fn cut_start(&self) -> Pos {
+        let mut p = self.start;
+        p[self.infeed_axis] = self.cut_start_infeed;
+        p
+    }
+
+    /// The thread pass `k`: from the cut start to the cut end along the straight (or taper)
+    /// line, locked to the spindle, the short axis adding the run-out over the last `runout_len`
+    /// of the long axis; started `phase(k)` of a turn after the index.
+    pub fn pass_move(&self, k: u64) -> ThreadPass {
+        let from = self.cut_start();
         let mut target = self.cut_end;
-        let runout = (self.runout != 0 && self.runout_len > 0).then(|| {
-            target[self.short_axis] += self.runout;
-            RunOut { axis: self.short_axis, amount: self.runout, len: self.runout_len }
-        });
-        ThreadMove {
+        let (l, s) = (self.long_axis, self.short_axis);
+        let len = (target[l] - from[l]).unsigned_abs() as f64;
+        let dir = if target[l] >= from[l] { 1.0 } else { -1.0 };
+        let mut knots = [(0.0, 0.0); 4];
+        knots[0] = (from[l] as f64, from[s] as f64);
+        let mut n = 1;
+        if self.runout != 0 && self.runout_len > 0 {
+            // The line to the cut end, the run-out added linearly over its last part.
+            let at = (len - self.runout_len as f64).max(0.0);
+            if at > 0.0 {
+                let line = (target[s] - from[s]) as f64;
+                knots[1] = (from[l] as f64 + dir * at, from[s] as f64 + line * at / len);
+                n = 2;
+            }
+            target[s] += self.runout;
+        }
+        knots[n] = (target[l] as f64, target[s] as f64);
+        ThreadPass {
             target,
-            long_axis: self.long_axis,
+            along: l,
+            across: s,
+            knots,
+            n: n + 1,
             lead_nm: self.lead_nm as f64,
             dlead_nm: self.dlead_nm as f64,
-            runout,
             phase_rev: self.phase(k),
+            law: PassLaw::Locked,
             retract: self
                 .retract_on_hold
                 .then_some(ThreadRetract { cycle_start: self.start, short_axis: self.infeed_axis }),
+            alarm: AlarmKind::FeedZero,
         }
     }
 }
@@ -93,8 +121,7 @@ pub fn passes(c: &ThreadCycle, first: u64, out: &mut Vec<Step>) {
     let end = c.passes.min(first.saturating_add(PECKS_PER_CHUNK as u64));
     for k in first..end {
         let mv = c.pass_move(k);
-        let mut cut_start = c.start;
-        cut_start[c.infeed_axis] = c.cut_start_infeed;
+        let cut_start = c.cut_start();
         let mut out_short = mv.target;
         out_short[c.infeed_axis] = c.start[c.infeed_axis];
         out.push(Step::Phase(Phase::Positioning));

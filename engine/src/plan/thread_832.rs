@@ -11,7 +11,7 @@
 //! with a tiny maximum cut).
 
 use crate::alarm::AlarmKind;
-use crate::plan::{More, Pos, Step};
+use crate::plan::{More, PassLaw, Pos, Step, ThreadPass};
 use crate::trace::Phase;
 use crate::units::Nm;
 
@@ -57,33 +57,6 @@ pub struct ThreadCycle {
     pub starts: u64,
     /// Air cuts Q476 (per start).
     pub air_cuts: u64,
-}
-
-/// One synchronised cutting pass: the along axis follows the spindle at `lead_nm` per
-/// revolution from the spindle angle `angle_mdeg` on; the across axis is a function of the along
-/// position through the knots.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ThreadPass {
-    /// Axis slot of the pitch direction.
-    pub along: usize,
-    /// Axis slot of the infeed direction.
-    pub across: usize,
-    /// (along, across) points, the first where the tool stands; along moves one way only.
-    pub knots: [(Nm, Nm); 4],
-    /// How many knots are used (2..4).
-    pub n: usize,
-    /// Lead, nm per revolution (> 0).
-    pub lead_nm: i64,
-    /// The spindle angle at which the pass starts, milli-degrees.
-    pub angle_mdeg: i64,
-    /// Along distance before the thread starts (the axis must reach its speed within it).
-    pub approach: Nm,
-    /// Along distance after the thread ends (the axis must stop within it).
-    pub overrun: Nm,
-    /// Set once the executor has waited for the start angle.
-    pub armed: bool,
-    /// Raised when the spindle is not turning.
-    pub alarm: AlarmKind,
 }
 
 impl ThreadCycle {
@@ -146,16 +119,21 @@ impl ThreadCycle {
             knots[n] = (a_over, at_depth(a_over));
             n += 1;
         }
+        let mut fk = [(0.0, 0.0); 4];
+        for (f, (a, c)) in fk.iter_mut().zip(knots) {
+            *f = (a as f64, c as f64);
+        }
         ThreadPass {
+            target: self.pos(knots[n - 1].0, knots[n - 1].1),
             along: self.along,
             across: self.across,
-            knots,
+            knots: fk,
             n,
-            lead_nm: self.lead_nm,
-            angle_mdeg,
-            approach: self.approach,
-            overrun: self.overrun,
-            armed: false,
+            lead_nm: self.lead_nm as f64,
+            dlead_nm: 0.0,
+            phase_rev: angle_mdeg as f64 / 360_000.0,
+            law: PassLaw::Accelerated { room: Some((self.approach, self.overrun)) },
+            retract: None,
             alarm: AlarmKind::SpindleNotTurning,
         }
     }
@@ -189,8 +167,7 @@ impl ThreadCycle {
 /// passes; a [`Step::More`] carries the rest).
 pub fn thread_cycle(c: &ThreadCycle, out: &mut Vec<Step>) {
     out.push(Step::Phase(Phase::Positioning));
-    let first = c.pass_no(0);
-    let (a0, _) = first.knots[0];
+    let a0 = c.pass_no(0).knots[0].0 as Nm;
     let out_c = Nm::from(c.outward);
     // Rapid to the safety position in front of the thread (HDH-C832-02).
     out.push(Step::Rapid { target: c.pos(a0, c.line(a0) + out_c * c.clearance) });
@@ -205,14 +182,14 @@ pub fn passes(c: &ThreadCycle, next: u64, out: &mut Vec<Step>) {
     let out_c = Nm::from(c.outward);
     for i in next..end {
         let p = c.pass_no(i);
-        let (a0, c0) = p.knots[0];
-        let (a1, c1) = p.knots[p.n - 1];
+        let (a0, c0) = (p.knots[0].0 as Nm, p.knots[0].1 as Nm);
+        let (a1, c1) = (p.knots[p.n - 1].0 as Nm, p.knots[p.n - 1].1 as Nm);
         // Infeed to the pass' start (at the infeed angle: the start shifts along, HDH-C832-08).
         out.push(Step::Phase(Phase::Positioning));
         out.push(Step::Rapid { target: c.pos(a0, c0) });
         out.push(Step::Phase(Phase::Cutting));
         out.push(Step::HoldSuppress(true));
-        out.push(Step::ThreadPass(p));
+        out.push(Step::Thread(p));
         out.push(Step::Phase(Phase::Retract));
         let lifted = c.line(a1) + out_c * c.clearance;
         if lifted != c1 {
@@ -221,7 +198,7 @@ pub fn passes(c: &ThreadCycle, next: u64, out: &mut Vec<Step>) {
         out.push(Step::HoldSuppress(false));
         // Back to the start of the next cut at the clearance (HDH-C832-04).
         if i + 1 < total {
-            let (na, _) = c.pass_no(i + 1).knots[0];
+            let na = c.pass_no(i + 1).knots[0].0 as Nm;
             out.push(Step::Rapid { target: c.pos(na, c.line(na) + out_c * c.clearance) });
         }
     }
@@ -292,18 +269,18 @@ mod tests {
         let passes: Vec<ThreadPass> = steps
             .iter()
             .filter_map(|s| match s {
-                Step::ThreadPass(p) => Some(*p),
+                Step::Thread(p) => Some(*p),
                 _ => None,
             })
             .collect();
         assert_eq!(passes.len(), 2 * 8);
-        assert!(passes[..8].iter().all(|p| p.angle_mdeg == 0));
-        assert!(passes[8..].iter().all(|p| p.angle_mdeg == 180_000));
+        assert!(passes[..8].iter().all(|p| p.phase_rev == 0.0));
+        assert!(passes[8..].iter().all(|p| p.phase_rev == 0.5));
         // The air cut repeats the last depth and shift.
         assert_eq!(passes[7].knots, passes[6].knots);
         // Depth grows and the start shifts back by d·tan(30°) (towards the approach side).
-        let (a1, c1) = passes[0].knots[0];
-        let (a7, c7) = passes[6].knots[0];
+        let (a1, c1) = (passes[0].knots[0].0 as Nm, passes[0].knots[0].1 as Nm);
+        let (a7, c7) = (passes[6].knots[0].0 as Nm, passes[6].knots[0].1 as Nm);
         assert!(c7 < c1 && a7 > a1, "{:?} {:?}", passes[0].knots, passes[6].knots);
         assert_eq!(c7, 50_000_000 - 1_226_860);
         assert_eq!(a7, 4_000_000 + (1_226_860.0 * (30f64).to_radians().tan()).round() as i64);

@@ -9,7 +9,8 @@
 //! The dialect checks the words; this builder takes over at the drive line's start point and
 //! leaves the tool at (start X, Z end) as LinuxCNC does.
 
-use crate::plan::{Feed, Pos, Step};
+use crate::alarm::AlarmKind;
+use crate::plan::{PassLaw, Pos, Step, ThreadPass};
 use crate::trace::Phase;
 use crate::units::Nm;
 
@@ -94,10 +95,16 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
         p[c.z_axis] = z;
         p
     };
-    // Feed per revolution along the path, so that Z advances one pitch per revolution.
-    let synced = |dx: Nm, dz: Nm| {
-        let len = ((dx as f64).powi(2) + (dz as f64).powi(2)).sqrt();
-        Feed::PerRev(c.pitch as f64 * len / (dz.saturating_abs().max(1)) as f64)
+    // One synchronised pass along Z (one pitch per revolution), X through the tapers' knots:
+    // LinuxCNC waits for the index only before the first of a run of synchronised moves.
+    let knot = |x: Nm, z: Nm| (z as f64, x as f64);
+    let mut knots = [(0.0, 0.0); 4];
+    let mut n = 0;
+    let mut push = |k: (f64, f64)| {
+        if n == 0 || knots[n - 1] != k {
+            knots[n] = k;
+            n += 1;
+        }
     };
     out.push(Step::Phase(Phase::Positioning));
     out.push(Step::Rapid { target: at(safe_x, start_z) });
@@ -105,23 +112,37 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
     let mut z = start_z;
     if c.taper_ends & 1 != 0 && e > 0 {
         out.push(Step::Rapid { target: at(taper_x, start_z) });
-        out.push(Step::HoldSuppress(true));
-        out.push(Step::Phase(Phase::Cutting));
+        push(knot(taper_x, start_z));
         z = start_z.saturating_add(zdir * e);
-        out.push(Step::Feed { target: at(cut_x, z), feed: synced(cut_x - taper_x, e) });
     } else {
         out.push(Step::Rapid { target: at(cut_x, start_z) });
-        out.push(Step::HoldSuppress(true));
-        out.push(Step::Phase(Phase::Cutting));
     }
+    push(knot(cut_x, z));
+    let mut end = at(cut_x, end_z);
     if c.taper_ends & 2 != 0 && e > 0 {
         let straight_end = end_z.saturating_sub(zdir * e);
         if (straight_end as i128 - z as i128) * zdir as i128 > 0 {
-            out.push(Step::Feed { target: at(cut_x, straight_end), feed: synced(0, straight_end - z) });
+            push(knot(cut_x, straight_end));
         }
-        out.push(Step::Feed { target: at(taper_x, end_z), feed: synced(taper_x - cut_x, e) });
-    } else {
-        out.push(Step::Feed { target: at(cut_x, end_z), feed: synced(0, end_z - z) });
+        end = at(taper_x, end_z);
+    }
+    push(knot(end[c.x_axis], end_z));
+    out.push(Step::HoldSuppress(true));
+    out.push(Step::Phase(Phase::Cutting));
+    if n >= 2 && knots[0].0 != knots[n - 1].0 {
+        out.push(Step::Thread(ThreadPass {
+            target: end,
+            along: c.z_axis,
+            across: c.x_axis,
+            knots,
+            n,
+            lead_nm: c.pitch as f64,
+            dlead_nm: 0.0,
+            phase_rev: 0.0,
+            law: PassLaw::Accelerated { room: None },
+            retract: None,
+            alarm: AlarmKind::FeedZero,
+        }));
     }
     out.push(Step::HoldSuppress(false));
     out.push(Step::Phase(Phase::Retract));
@@ -166,9 +187,10 @@ mod tests {
         pass(&g76only(), 8 * IN / 1000, &mut v);
         let pts: Vec<(Nm, Nm)> = v
             .iter()
-            .filter_map(|s| match s {
-                Step::Rapid { target } | Step::Feed { target, .. } => Some((target[0], target[2])),
-                _ => None,
+            .flat_map(|s| match s {
+                Step::Rapid { target } => vec![(target[0], target[2])],
+                Step::Thread(p) => p.knots[1..p.n].iter().map(|&(z, x)| (x as Nm, z as Nm)).collect(),
+                _ => vec![],
             })
             .collect();
         // expected: (0.2370, 0.1955) (0.1170, 0.1955) (0.1170, -0.4291) (0.1620, -0.4791) (0.2370, -0.4791)

@@ -8,7 +8,7 @@ use crate::dialect::Interpreter;
 use crate::params::Params;
 use crate::parse::{Block, Word};
 use crate::plan::follow_tap::{follow_tap, FollowTap};
-use crate::plan::{Css, Feed, Plane, Pos, SpindleEffect, Step};
+use crate::plan::{Css, Feed, Plane, Pos, SpindleEffect, Step, ThreadPass};
 use crate::trace::{Phase, AXES};
 use crate::units::{Micros, Nm, NM_PER_INCH, NM_PER_MM};
 
@@ -301,7 +301,7 @@ impl KndInterp {
         c[X] = start[X];
         body.push(Step::Rapid { target: a });
         body.push(Step::HoldSuppress(true));
-        body.push(Step::Feed { target: b, feed: Feed::PerRev(lead as f64) });
+        body.extend(thread_pass(a, b, lead));
         body.push(Step::HoldSuppress(false));
         body.push(Step::Rapid { target: c });
         body.push(Step::Rapid { target: start });
@@ -447,7 +447,7 @@ impl Interpreter for KndInterp {
                     let lead = self.lead_word(&w, 320)?;
                     let target = self.moved(&t);
                     body.push(Step::HoldSuppress(true));
-                    body.push(Step::Feed { target, feed: Feed::PerRev(lead as f64) });
+                    body.extend(thread_pass(self.pos, target, lead));
                     body.push(Step::HoldSuppress(false));
                     self.pos = target;
                 }
@@ -530,4 +530,12 @@ fn arc_center(start: Pos, end: Pos, cw: bool, w: &Words, u: &Units) -> Result<[N
     let kz = w.get('K').map_or(0, |k| u.len(k.value));
     let ix = w.get('I').map_or(0, |i| u.len(i.value));
     Ok([start[Z] + kz, start[X] + ix])
+}
+
+/// A G32 / G92 thread pass from `from` to `to`: F (or I) is the long axis' travel per spindle
+/// revolution ("为主轴转一圈长轴的位移量"), and the cut starts at the encoder's one-revolution
+/// signal ("螺纹切削开始是从检测出主轴上的位置编程器一转信号后才开始的", KND-THR-01), the axes
+/// accelerating to speed and decelerating at its end ("由于升降速的原因会出现导程不正确部分").
+fn thread_pass(from: Pos, to: Pos, lead: Nm) -> Option<Step> {
+    ThreadPass::line(from, to, [Z, X], lead as f64, false).map(Step::Thread)
 }

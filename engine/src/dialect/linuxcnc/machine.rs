@@ -13,7 +13,7 @@ use crate::dialect::common::g_name;
 use crate::params::Params;
 use crate::plan::follow_tap::{follow_tap, FollowTap};
 use crate::plan::thread_g76::{thread_g76, ThreadG76, MAX_PASSES};
-use crate::plan::{Feed, Plane, Pos, SpindleEffect, Step};
+use crate::plan::{Feed, Plane, Pos, SpindleEffect, Step, ThreadPass};
 use crate::trace::Phase;
 use crate::units::{Micros, Nm};
 
@@ -578,7 +578,15 @@ impl Machine {
         let t = self.machine(self.target(b)?);
         out.push(Step::HoldSuppress(true));
         out.push(Step::Phase(Phase::Cutting));
-        out.push(Step::Feed { target: t, feed: Feed::PerRev(lead as f64) });
+        // Synchronised from the next index pulse on (LCNC-G33-02), K along the path.
+        let longest = |p: [usize; 3]| {
+            let mut v = p;
+            v.sort_by_key(|&i| std::cmp::Reverse((t[i] - self.pos[i]).unsigned_abs()));
+            [v[0], v[1]]
+        };
+        if let Some(pass) = ThreadPass::line(self.pos, t, longest([0, 1, 2]), lead as f64, true) {
+            out.push(Step::Thread(pass));
+        }
         out.push(Step::HoldSuppress(false));
         out.push(Step::Phase(Phase::Idle));
         self.pos = t;

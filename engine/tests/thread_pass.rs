@@ -1,0 +1,377 @@
+//! The one thread-pass executor (`Step::Thread`, `exec/thread.rs`) on every cycle that uses it:
+//! GSK G92.3 (locked law, variable lead), Heidenhain cycle 832, KND G32/G92 and LinuxCNC G33/G76
+//! (accelerated law, constant lead). For each: the spindle-angle law sample by sample, and the pass
+//! starting at the spindle's index plus the pass' phase. Plus the proof that folding the two
+//! former executors into one left the G92.3 and 832 traces as they were (digests of the traces of
+//! the executors before the change), except the named fix of the first G92.3 sample.
+
+mod support;
+
+use nc_engine::input::{Condition, Input, InputSchedule};
+use nc_engine::trace::{Event, Phase, Trace};
+use nc_engine::RunOptions;
+use support::run;
+
+const MM: f64 = 1e6;
+
+fn sampled(inputs: InputSchedule) -> RunOptions {
+    RunOptions { inputs, sample_us: 1000, ..RunOptions::default() }
+}
+
+/// One pass as sampled: the spindle's unwrapped revolutions (absolute: the index is at whole
+/// numbers) when the cutting phase began, at the last sample before the drive axis moved, and at
+/// every sample from the first that moved on, with the drive axis' travel there (nm).
+struct Pass {
+    at_phase: f64,
+    still: f64,
+    moving: Vec<(f64, f64)>,
+}
+
+/// Every cutting phase of `t` in which `axis` (scaled by `scale`: 0.5 for a lathe's diameter X)
+/// moves.
+fn passes(t: &Trace, axis: usize, scale: f64) -> Vec<Pass> {
+    let phases: Vec<(u64, Phase)> = t.phases().collect();
+    let cuts: Vec<(u64, u64)> =
+        phases.windows(2).filter(|w| w[0].1 == Phase::Cutting).map(|w| (w[0].0, w[1].0)).collect();
+    let mut revs = Vec::new();
+    let (mut r, mut last) = (0.0, None);
+    for (tu, s) in t.samples() {
+        if let Some(l) = last {
+            r += ((s.spindle_mdeg - l) as f64).rem_euclid(360_000.0) / 360_000.0;
+        } else {
+            r = s.spindle_mdeg as f64 / 360_000.0;
+        }
+        last = Some(s.spindle_mdeg);
+        revs.push((tu, r, s.axes[axis] as f64 * scale));
+    }
+    let mut out = Vec::new();
+    for (a, b) in cuts {
+        let i0 = revs.iter().rposition(|s| s.0 <= a).unwrap();
+        let start = revs[i0].2;
+        let Some(i1) = (i0 + 1..revs.len()).find(|&i| revs[i].0 < b && revs[i].2 != start) else {
+            continue;
+        };
+        let moving = revs[i1..].iter().take_while(|s| s.0 <= b).map(|s| (s.1, (s.2 - start).abs())).collect();
+        out.push(Pass { at_phase: revs[i0].1, still: revs[i1 - 1].1, moving });
+    }
+    out
+}
+
+/// For a dialect without phase events (KND): every run of samples in which Z goes down (the
+/// threads of the program; its rapids go up or along X), the sample before it standing for the
+/// phase's start.
+fn passes_down_z(t: &Trace) -> Vec<Pass> {
+    let mut out: Vec<Pass> = Vec::new();
+    let (mut r, mut last, mut prev) = (0.0, None::<i64>, None::<(f64, f64)>);
+    let mut open = false;
+    let mut z0 = 0.0;
+    for (_, s) in t.samples() {
+        if let Some(l) = last {
+            r += ((s.spindle_mdeg - l) as f64).rem_euclid(360_000.0) / 360_000.0;
+        } else {
+            r = s.spindle_mdeg as f64 / 360_000.0;
+        }
+        last = Some(s.spindle_mdeg);
+        let z = s.axes[2] as f64;
+        match prev {
+            Some((pr, pz)) if z < pz => {
+                if !open {
+                    out.push(Pass { at_phase: pr, still: pr, moving: Vec::new() });
+                    open = true;
+                    z0 = pz;
+                }
+                out.last_mut().unwrap().moving.push((r, z0 - z));
+            }
+            _ => open = false,
+        }
+        prev = Some((r, z));
+    }
+    out
+}
+
+/// The first revolution count at or after `from` whose fraction is `phase`.
+fn next_angle(from: f64, phase: f64) -> f64 {
+    let k = (from - phase).ceil();
+    k + phase
+}
+
+/// Accelerated law, constant lead `lead` nm/rev, start at index + `phase(k)` of pass k: the pass
+/// starts at the first such angle after its cutting phase began (a steady spindle), between the
+/// last still sample and the first moving one, and once at speed the drive axis is exactly
+/// `lead × (revolutions since that angle) − v²/(2a)`, the same constant on every pass. Returns
+/// the waits (revolutions from the phase to the start) and the constant.
+fn check_accelerated(ps: &[Pass], lead: f64, phase: impl Fn(usize) -> f64) -> (Vec<f64>, f64) {
+    assert!(!ps.is_empty());
+    let mut waits = Vec::new();
+    let mut lag = None;
+    let q = 1.0 / 360_000.0;
+    for (k, p) in ps.iter().enumerate() {
+        let start = next_angle(p.at_phase - q, phase(k));
+        assert!(
+            p.still - q <= start && start <= p.moving[0].0 + q,
+            "pass {k}: {} {start} {}",
+            p.still,
+            p.moving[0].0
+        );
+        waits.push(start - p.at_phase);
+        // Cruise: the travel per revolution between consecutive samples is the lead.
+        let cruise: Vec<&(f64, f64)> = p
+            .moving
+            .windows(2)
+            .filter(|w| w[1].0 > w[0].0 && ((w[1].1 - w[0].1) / (w[1].0 - w[0].0) - lead).abs() < lead * 1e-3)
+            .map(|w| &w[1])
+            .collect();
+        assert!(cruise.len() > 20, "pass {k}: {} cruise samples", cruise.len());
+        for &&(r, s) in &cruise {
+            let l = lead * (r - start) - s;
+            let want = *lag.get_or_insert(l);
+            // Angle in milli-degrees (lead/360000 nm), positions in nm.
+            assert!((l - want).abs() < lead * q + 2.0, "pass {k} at {r}: lag {l} vs {want}");
+        }
+    }
+    (waits, lag.unwrap())
+}
+
+/// Locked law with lead `f` and lead change `d`: pass k starts at the first index + `phase(k)`
+/// after its last still sample, and every sample of it is at `f·n + d·n²/2` (n revolutions since
+/// that angle), travel per turn sqrt(f² + 2·d·s), up to `len`.
+fn check_locked(ps: &[Pass], f: f64, d: f64, len: f64, phase: impl Fn(usize) -> f64) {
+    let law = |n: f64| f * n + d * n * n / 2.0;
+    for (k, p) in ps.iter().enumerate() {
+        let start = next_angle(p.still, phase(k));
+        assert!(p.still < start && start <= p.moving[0].0, "pass {k}");
+        let mut checked = 0;
+        for w in p.moving.windows(2) {
+            let (r, s) = w[1];
+            if s >= len - 1.0 {
+                break;
+            }
+            // The law at every sample: within the quantisation of the sampled angle (1 mdeg).
+            let n = r - start;
+            assert!((s - law(n)).abs() < 15.0, "pass {k}, n {n}: {s} vs {}", law(n));
+            // Travel per turn between samples: sqrt(F² + 2·D·s) at the middle.
+            let (dn, ds) = (w[1].0 - w[0].0, w[1].1 - w[0].1);
+            let per_turn = (f * f + 2.0 * d * 0.5 * (w[0].1 + w[1].1)).sqrt();
+            assert!((ds / dn - per_turn).abs() < per_turn * 1e-3, "{} vs {per_turn}", ds / dn);
+            checked += 1;
+        }
+        assert!(checked > 500, "{checked}");
+        // The first sample is already on the law (it was the cut start before the executors were
+        // folded into one: the pass began at the tick after the start angle).
+        let (r, s) = p.moving[0];
+        assert!(s > 0.0 && (s - law(r - start)).abs() < 15.0);
+    }
+}
+
+const G923: &str = "G0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\nG0 X60;\nM30;\n";
+
+#[test]
+fn g923_locked_law_with_variable_lead_from_index_plus_phase() {
+    // Seed 002's example: F4 D0.1, E1 Q0.5 A1: 5 passes started 0, 1/8 .. 4/8 of a turn after
+    // the index; travel after n turns F·n + D·n²/2, i.e. travel per turn sqrt(F² + 2·D·s).
+    let t = run("gsk-lathe", &[], G923, &sampled(InputSchedule::default()));
+    assert_eq!(t.alarms().count(), 0);
+    let ps = passes(&t, 2, 1.0);
+    assert_eq!(ps.len(), 5);
+    for (k, p) in ps.iter().enumerate() {
+        // Each pass starts at the first of its start angles after it is reached.
+        let start = next_angle(p.at_phase, k as f64 / 8.0);
+        assert!(p.still < start && start <= p.moving[0].0, "pass {k}");
+    }
+    check_locked(&ps, 4.0 * MM, 0.1 * MM, 25.0 * MM, |k| k as f64 / 8.0);
+}
+
+#[test]
+fn g923_a_feed_hold_during_the_wait_for_the_start_angle_keeps_the_pass_on_its_groove() {
+    // With thread retract on, a feed hold 1 ms into the third pass' cutting phase falls in its wait
+    // for the index + 1/4 turn (no motion to retract): the control holds there; cycle start 0.3 s
+    // later waits for the start angle again (not the one that passed meanwhile).
+    let hold = InputSchedule::default()
+        .when(Condition::Phase(Phase::Cutting), 3, 1000, Input::FeedHold)
+        .when(Condition::Phase(Phase::Cutting), 3, 301_000, Input::CycleStart);
+    let t = run("gsk-lathe", &[("nc.thread_retract", None, 1.0)], G923, &sampled(hold));
+    assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
+    let ps = passes(&t, 2, 1.0);
+    assert_eq!(ps.len(), 5);
+    // The third pass started after the cycle start, at least 0.3 s (2.5 turns at S500) late.
+    assert!(ps[2].moving[0].0 - ps[2].at_phase > 2.5, "{}", ps[2].moving[0].0 - ps[2].at_phase);
+    check_locked(&ps, 4.0 * MM, 0.1 * MM, 25.0 * MM, |k| k as f64 / 8.0);
+}
+
+#[test]
+fn c832_accelerated_law_from_the_start_angle_same_helix_every_pass() {
+    // Two starts (Q475=2) from Q470=30°: passes of start j begin at 30° + j·180°.
+    let mut s = String::from(
+        "0 BEGIN PGM T MM\n1 FUNCTION MODE TURN\n2 TOOL CALL 1 S600\n3 L X+30 Z+5 R0 FMAX M303\n\
+         4 CYCL DEF 832 THREAD EXTENDED\n",
+    );
+    let q = [
+        (471, "0"),
+        (461, "0"),
+        (460, "1"),
+        (472, "1.5"),
+        (473, "0.6"),
+        (464, "0"),
+        (491, "20"),
+        (492, "0"),
+        (493, "20"),
+        (494, "-20"),
+        (469, "0"),
+        (474, "0"),
+        (465, "2"),
+        (466, "2"),
+        (463, "0.2"),
+        (467, "30"),
+        (468, "1"),
+        (470, "30"),
+        (475, "2"),
+        (476, "0"),
+    ];
+    for (n, v) in q {
+        s.push_str(&format!("  Q{n}={v}\n"));
+    }
+    s.push_str("5 CYCL CALL\n6 L X+40 Z+20 FMAX M305\n7 M30\n8 END PGM T MM\n");
+    let t = run("heidenhain", &[], &s, &sampled(InputSchedule::default()));
+    assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
+    let ps = passes(&t, 2, 1.0);
+    let per_start = ps.len() / 2;
+    assert!(per_start >= 3, "{}", ps.len());
+    let (waits, lag) = check_accelerated(&ps, 1.5 * MM, |k| (30.0 + 180.0 * (k / per_start) as f64) / 360.0);
+    // v = 1.5 mm x 10 rev/s = 15 mm/s, a = 6000 mm/min per 100 ms = 1000 mm/s²: v²/2a = 0.1125 mm.
+    assert!((lag - 112_500.0).abs() < 200.0, "{lag}");
+    assert!(waits.iter().all(|w| (0.0..1.0).contains(w)), "{waits:?}");
+}
+
+#[test]
+fn knd_g32_and_g92_start_at_the_one_revolution_signal_at_lead_times_speed() {
+    // Seed 001: "螺纹切削开始是从检测出主轴上的位置编程器一转信号后才开始的": every pass of the
+    // same thread starts at the index, so the passes cut one groove.
+    let prog = "G00 X30 Z5;\nM03 S600;\nG04 P500;\nG32 Z-20 F2;\nG00 X40;\nZ5;\nG92 X29 Z-20 F2;\nX28.5;\nX28;\nM30;\n";
+    let t = run("knd-lathe", &[], prog, &sampled(InputSchedule::default()));
+    assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
+    let ps = passes_down_z(&t);
+    assert_eq!(ps.len(), 4);
+    // (Without phase events the wait cannot be measured; the start angle and the one groove can.)
+    let (_, lag) = check_accelerated(&ps, 2.0 * MM, |_| 0.0);
+    // 2 mm x 10 rev/s = 20 mm/s at 1000 mm/s²: 0.2 mm behind the locked law.
+    assert!((lag - 200_000.0).abs() < 200.0, "{lag}");
+}
+
+#[test]
+fn knd_g32_taper_lead_is_along_the_long_axis() {
+    // Seed 001: "F 是公制螺纹的螺距,为主轴转一圈长轴的位移量" - Z (25 mm) is the long axis of
+    // X30 → X40 (5 mm radius) over Z5 → Z-20.
+    let prog = "G00 X30 Z5;\nM03 S600;\nG04 P500;\nG32 X40 Z-20 F2;\nM30;\n";
+    let t = run("knd-lathe", &[], prog, &sampled(InputSchedule::default()));
+    assert_eq!(t.alarms().count(), 0);
+    check_accelerated(&passes_down_z(&t), 2.0 * MM, |_| 0.0);
+}
+
+#[test]
+fn linuxcnc_g33_starts_at_the_next_index_pulse() {
+    // LinuxCNC's motion controller waits for the encoder's index (index-enable, cleared at the
+    // next index pulse) before a synchronised move: anything from 0 to one revolution.
+    let prog = "G18 G21 M3 S600\nG4 P0.5\nG0 X10 Z5\nG33 Z-20 K1.5\nG0 X12\nG0 Z5\nG0 X10\nG4 P0.033\nG33 Z-20 K1.5\nM2\n";
+    let t = run("linuxcnc", &[], prog, &sampled(InputSchedule::default()));
+    assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
+    let ps = passes(&t, 2, 1.0);
+    assert_eq!(ps.len(), 2);
+    let (waits, _) = check_accelerated(&ps, 1.5 * MM, |_| 0.0);
+    assert!(waits.iter().all(|w| (0.0..1.0).contains(w)) && waits.iter().any(|w| *w > 0.05), "{waits:?}");
+}
+
+#[test]
+fn linuxcnc_g76_every_pass_starts_at_the_next_index_pulse_on_one_groove() {
+    let prog =
+        "G18 G21 G8 M3 S600\nG4 P0.5\nG0 X7 Z3\nG76 P1.5 Z-20 I-1 J0.25 K0.92 R2 Q0 H1 E2 L3\nG0 X20\nM2\n";
+    let t = run("linuxcnc", &[], prog, &sampled(InputSchedule::default()));
+    assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
+    let ps = passes(&t, 2, 1.0);
+    assert_eq!(ps.len(), 15);
+    let (waits, lag) = check_accelerated(&ps, 1.5 * MM, |_| 0.0);
+    // Q0: every pass starts at Z3, so one groove means one lag: 15 mm/s at 1000 mm/s² (0.1125 mm).
+    assert!((lag - 112_500.0).abs() < 200.0, "{lag}");
+    assert!(waits.iter().all(|w| (0.0..1.0).contains(w)), "{waits:?}");
+}
+
+/// FNV-1a over the trace: every event, samples with all axes, speed and angle.
+fn digest(events: &[nc_engine::trace::TraceEvent]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for e in events {
+        let line = match &e.event {
+            Event::Sample(s) => format!("{} {:?} {} {}\n", e.t_us, s.axes, s.spindle_mrpm, s.spindle_mdeg),
+            other => format!("{} {other:?}\n", e.t_us),
+        };
+        for b in line.bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// The trace as the former G92.3 executor wrote it: the first sample of every pass still at the
+/// cut start (that executor began a pass at the interpolation tick after its start angle and
+/// wrote the tick's sample before the pass moved).
+fn as_before_the_fix(t: &Trace) -> Vec<nc_engine::trace::TraceEvent> {
+    let mut ev = t.events.clone();
+    let mut cutting = false;
+    let mut prev: Option<[i64; nc_engine::trace::AXES]> = None;
+    let mut first = false;
+    for e in ev.iter_mut() {
+        match &mut e.event {
+            Event::Phase(p) => {
+                cutting = *p == Phase::Cutting;
+                first = cutting;
+            }
+            Event::Sample(s) => {
+                if cutting && first {
+                    if let Some(p) = prev {
+                        if p[2] != s.axes[2] {
+                            s.axes = p;
+                            first = false;
+                        }
+                    }
+                }
+                prev = Some(s.axes);
+            }
+            _ => {}
+        }
+    }
+    ev
+}
+
+#[test]
+fn the_one_executor_gives_the_traces_of_the_two_it_replaced() {
+    // Digests of whole traces (1 ms samples) written by `exec/thread.rs` (G92.3) and
+    // `exec/thread_832.rs` (cycle 832) before they were folded into one executor.
+    let g923 = G923;
+    let taper = "G0 X40 Z5;\nM03 S400;\nG92.3 X36 Z-10 R-1 I8 E0.5 Q1. A1;\nM30;\n";
+    let t = run("gsk-lathe", &[], g923, &sampled(InputSchedule::default()));
+    assert_eq!(digest(&as_before_the_fix(&t)), G923_BEFORE);
+    let t = run("gsk-lathe", &[], taper, &sampled(InputSchedule::default()));
+    assert_eq!(digest(&as_before_the_fix(&t)), TAPER_BEFORE);
+    // Thread retract on feed hold, cycle start re-cuts the pass.
+    let hold = InputSchedule::default().at(1_000_000, Input::FeedHold).at(3_000_000, Input::CycleStart);
+    let t = run("gsk-lathe", &[("nc.thread_retract", None, 1.0)], g923, &sampled(hold));
+    assert_eq!(digest(&as_before_the_fix(&t)), RETRACT_BEFORE);
+    let c832 = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenarios/heidenhain/c832/longitudinal_outside.yaml"
+    ))
+    .unwrap();
+    let prog: String = c832
+        .split("program: |\n")
+        .nth(1)
+        .unwrap()
+        .lines()
+        .take_while(|l| l.starts_with("  ") || l.is_empty())
+        .map(|l| format!("{}\n", l.strip_prefix("  ").unwrap_or(l)))
+        .collect();
+    let t = run("heidenhain", &[], &prog, &sampled(InputSchedule::default()));
+    assert_eq!(digest(&t.events), C832_BEFORE);
+}
+
+const G923_BEFORE: u64 = 4809895225600197577;
+const TAPER_BEFORE: u64 = 6290682639909171455;
+const RETRACT_BEFORE: u64 = 3491550399745240082;
+const C832_BEFORE: u64 = 11174102450272644338;
