@@ -456,6 +456,11 @@ impl GskInterp {
                 },
                 steps,
             );
+            if n + 1 < k {
+                // Single block stops where a held-over feed hold does: when the return of each
+                // hole is complete, not only after the last (seed 000 注意事项 6, GSK-RT-27).
+                steps.push(Step::SingleBlockStop);
+            }
             if let Some(a) = clamp {
                 steps.push(Step::Function { letter: 'M', code: a + 1, effect: SpindleEffect::None });
             }
