@@ -2,7 +2,7 @@
 //! times with range checks, and the plant settings every dialect shares.
 
 use crate::alarm::{Alarm, AlarmKind};
-use crate::exec::{PlantConfig, PlcConfig};
+use crate::exec::{OverrideLimits, PlantConfig, PlcConfig};
 use crate::params::Params;
 use crate::parse::{Block, Word};
 use crate::trace::{AXES, AXIS_LETTERS};
@@ -21,6 +21,8 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         backlash_nm[i] = (p.get_axis(backlash, Some(l)) * 1e6).round() as Nm;
     }
     let period = p.get("nc.period_us") as Micros;
+    // An override id a table does not define keeps the project's default switch (DEC-112).
+    let pct = |id: &str, default: u32| if p.def(id).is_some() { p.get(id) as u32 } else { default };
     PlantConfig {
         period_us: [1000, 2000, 4000, 8000].into_iter().find(|&v| v >= period).unwrap_or(8000),
         rapid_nm_min,
@@ -48,6 +50,12 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
             fin_timeout_us: ms("plc.fin_timeout_ms"),
             spindle_stall_us: ms("plc.spindle_stall_ms"),
             zsp_us: ms("plc.zsp_ms"),
+        },
+        overrides: OverrideLimits {
+            feed_max_pct: pct("nc.feed_override_max_pct", 200),
+            feed_step_pct: pct("nc.feed_override_step_pct", 1),
+            spindle_min_pct: pct("nc.spindle_override_min_pct", 0),
+            spindle_max_pct: pct("nc.spindle_override_max_pct", 200),
         },
     }
 }

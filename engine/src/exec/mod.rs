@@ -19,7 +19,7 @@ mod thread;
 mod thread_832;
 mod triggers;
 
-pub use config::{PlantConfig, PlcConfig};
+pub use config::{OverrideLimits, PlantConfig, PlcConfig};
 
 use std::collections::VecDeque;
 
