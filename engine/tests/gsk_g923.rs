@@ -245,11 +245,11 @@ fn gsk_g923_12_feed_hold_finishes_the_pass_when_the_retract_bit_is_0() {
     assert!(codes(&t).is_empty(), "{:?}", codes(&t));
     assert_eq!(t.end().unwrap().reason, EndReason::ProgramEnd);
     assert_eq!(cut_count(&t), 5);
-    // The hold comes after the X retract of the pass: SPL rises with Z at the cut end.
+    // The hold comes when the pass is back at the cycle start (its X retract and Z return
+    // done), where single block stops too (seed 000 注意事项 6, DEC-111).
     let spl = t.edges(nc_engine::trace::Signal::Spl).find(|e| e.1).unwrap().0;
     let at = t.samples().find(|s| s.0 >= spl).unwrap().1;
-    assert_eq!(at.axes[0], 40 * MM);
-    assert_eq!(at.axes[2], -20 * MM);
+    assert_eq!((at.axes[0], at.axes[2]), (40 * MM, 5 * MM), "held at the cycle start");
 }
 
 #[test]

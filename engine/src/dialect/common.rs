@@ -2,7 +2,7 @@
 //! times with range checks, and the plant settings every dialect shares.
 
 use crate::alarm::{Alarm, AlarmKind};
-use crate::exec::{PlantConfig, PlcConfig};
+use crate::exec::{OverrideLimits, PlantConfig, PlcConfig};
 use crate::params::{axis, bit, num, ParamDef, ParamKind::*, Params};
 use crate::parse::{Block, Word};
 use crate::trace::{AXES, AXIS_LETTERS};
@@ -21,6 +21,8 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         backlash_nm[i] = (p.get_axis(backlash, Some(l)) * 1e6).round() as Nm;
     }
     let period = p.get("nc.period_us") as Micros;
+    // An override id a table does not define keeps the project's default switch (DEC-112).
+    let pct = |id: &str, default: u32| if p.def(id).is_some() { p.get(id) as u32 } else { default };
     PlantConfig {
         period_us: [1000, 2000, 4000, 8000].into_iter().find(|&v| v >= period).unwrap_or(8000),
         rapid_nm_min,
@@ -50,6 +52,12 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
             spindle_stall_us: ms("plc.spindle_stall_ms"),
             zsp_us: ms("plc.zsp_ms"),
         },
+        overrides: OverrideLimits {
+            feed_max_pct: pct("nc.feed_override_max_pct", 200),
+            feed_step_pct: pct("nc.feed_override_step_pct", 1),
+            spindle_min_pct: pct("nc.spindle_override_min_pct", 0),
+            spindle_max_pct: pct("nc.spindle_override_max_pct", 200),
+        },
     }
 }
 
@@ -77,6 +85,14 @@ pub mod rows {
     pub const FEED_MAX_MM_MIN: ParamDef = num("nc.feed_max_mm_min", "max cutting feed", Real, 1.0, 240000.0, 6000.0, "mm/min", "Upper limit of the cutting feed.");
     /// `nc.feed_ramp_ms`.
     pub const FEED_RAMP_MS: ParamDef = num("nc.feed_ramp_ms", "cutting time constant", Int, 0.0, 4000.0, 100.0, "ms", "Time to reach the maximum cutting feed.");
+    /// `nc.feed_override_max_pct` (DEC-112; a dialect with a documented range changes the default and text).
+    pub const FEED_OVERRIDE_MAX_PCT: ParamDef = num("nc.feed_override_max_pct", "feed override maximum", Int, 0.0, 254.0, 200.0, "%", "Top position of the feed override switch; a larger input acts as it (DEC-112). The documents of this dialect give no range: the project default.");
+    /// `nc.feed_override_step_pct` (DEC-112).
+    pub const FEED_OVERRIDE_STEP_PCT: ParamDef = num("nc.feed_override_step_pct", "feed override step", Int, 1.0, 100.0, 1.0, "%", "Step between the feed override switch's positions; an input between two acts as the lower one (DEC-112).");
+    /// `nc.spindle_override_min_pct` (DEC-112).
+    pub const SPINDLE_OVERRIDE_MIN_PCT: ParamDef = num("nc.spindle_override_min_pct", "spindle override minimum", Int, 0.0, 254.0, 0.0, "%", "Lowest position of the spindle override switch (DEC-112). No document of this dialect gives it: the project default.");
+    /// `nc.spindle_override_max_pct` (DEC-112).
+    pub const SPINDLE_OVERRIDE_MAX_PCT: ParamDef = num("nc.spindle_override_max_pct", "spindle override maximum", Int, 0.0, 254.0, 200.0, "%", "Top position of the spindle override switch (DEC-112). No document of this dialect gives it: the project default.");
     /// `nc.dry_run_mm_min`.
     pub const DRY_RUN_MM_MIN: ParamDef = num("nc.dry_run_mm_min", "dry run feed", Real, 1.0, 240000.0, 2000.0, "mm/min", "Feed of cutting moves under dry run.");
     /// `nc.spindle_max_rpm`.

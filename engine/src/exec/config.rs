@@ -67,4 +67,54 @@ pub struct PlantConfig {
     pub excess_error_nm: Nm,
     /// The PLC ladder.
     pub plc: PlcConfig,
+    /// The override switches' ranges and steps.
+    pub overrides: OverrideLimits,
+}
+
+/// The range and step of the operator's override switches, from each dialect's documents
+/// (`nc.*_override_*` parameters; COM-MOT-07, DEC-112).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OverrideLimits {
+    /// Top position of the feed override switch, %.
+    pub feed_max_pct: u32,
+    /// Step between two positions of the feed override switch, % (1: any whole percent).
+    pub feed_step_pct: u32,
+    /// Lowest position of the spindle override switch, %.
+    pub spindle_min_pct: u32,
+    /// Top position of the spindle override switch, %.
+    pub spindle_max_pct: u32,
+}
+
+impl OverrideLimits {
+    /// The feed override a requested value gives: beyond the top position, the top position;
+    /// between two positions, the lower one (never faster than asked).
+    pub fn feed(&self, pct: u32) -> u32 {
+        let v = pct.min(self.feed_max_pct);
+        v - v % self.feed_step_pct.max(1)
+    }
+
+    /// The spindle override a requested value gives: clamped to the switch's range.
+    pub fn spindle(&self, pct: u32) -> u32 {
+        pct.min(self.spindle_max_pct).max(self.spindle_min_pct.min(self.spindle_max_pct))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::OverrideLimits;
+
+    /// DEC-112: the KND switch (seed 001, 0..150 % in 10 % steps) and the project default.
+    #[test]
+    fn override_positions_beyond_and_between() {
+        let knd =
+            OverrideLimits { feed_max_pct: 150, feed_step_pct: 10, spindle_min_pct: 0, spindle_max_pct: 200 };
+        assert_eq!(
+            [knd.feed(200), knd.feed(150), knd.feed(75), knd.feed(9), knd.feed(0)],
+            [150, 150, 70, 0, 0]
+        );
+        let lcnc =
+            OverrideLimits { feed_max_pct: 120, feed_step_pct: 1, spindle_min_pct: 50, spindle_max_pct: 100 };
+        assert_eq!([lcnc.feed(150), lcnc.feed(73)], [120, 73]);
+        assert_eq!([lcnc.spindle(20), lcnc.spindle(80), lcnc.spindle(150)], [50, 80, 100]);
+    }
 }

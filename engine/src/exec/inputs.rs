@@ -94,8 +94,8 @@ impl Exec<'_> {
             Input::DryRun(b) => self.dry_run = b,
             Input::MachineLock(b) => self.machine_lock = b,
             Input::OptionalStop(b) => self.optional_stop = b,
-            Input::FeedOverride(p) => self.feed_override = p.min(200),
-            Input::SpindleOverride(p) => self.spindle_override = p.min(200),
+            Input::FeedOverride(p) => self.feed_override = self.cfg.overrides.feed(p),
+            Input::SpindleOverride(p) => self.spindle_override = self.cfg.overrides.spindle(p),
             Input::EmergencyStop(true) => {
                 self.set_signal(Signal::Esp, true);
                 self.stop_motion_now();

@@ -18,7 +18,7 @@ mod steps;
 mod thread;
 mod triggers;
 
-pub use config::{PlantConfig, PlcConfig};
+pub use config::{OverrideLimits, PlantConfig, PlcConfig};
 
 use std::collections::VecDeque;
 

@@ -13,6 +13,7 @@ impl Exec<'_> {
     pub(super) fn start_next(&mut self) {
         if self.hold_requested {
             self.hold_requested = false;
+            self.merge_single_block_stop();
             self.hold_force();
             return;
         }
@@ -33,6 +34,20 @@ impl Exec<'_> {
             self.motion_step = Some(step.clone());
         }
         self.start_step(step);
+    }
+
+    /// A hold that falls where single block stops anyway (the next step that does anything is a
+    /// single-block stop, or the end of the block) is that stop too: one stop, not two. Feed hold
+    /// and single block take effect at the same point of a tapping cycle (seed 000 注意事项 6,
+    /// GSK-RT-27, COM-INP-03).
+    fn merge_single_block_stop(&mut self) {
+        match self.steps.iter().position(|s| !matches!(s, Step::Phase(_))) {
+            Some(i) if matches!(self.steps[i], Step::SingleBlockStop) => {
+                self.steps.remove(i);
+            }
+            None => self.in_block = false,
+            Some(_) => {}
+        }
     }
 
     fn read_block(&mut self) {

@@ -133,10 +133,12 @@ pub fn passes(c: &ThreadCycle, first: u64, out: &mut Vec<Step>) {
         out.push(Step::Thread(mv));
         out.push(Step::Phase(Phase::Retract));
         out.push(Step::Rapid { target: out_short });
+        out.push(Step::Rapid { target: c.start });
+        // A held-over feed hold acts back at the cycle start, where single block stops too
+        // (GSK-G923-12, GSK-G923-13; seed 000 注意事项 6 treats the two as one rule).
         if !c.retract_on_hold {
             out.push(Step::HoldSuppress(false));
         }
-        out.push(Step::Rapid { target: c.start });
         if k + 1 < c.passes {
             out.push(Step::SingleBlockStop);
         }

@@ -194,7 +194,7 @@ impl FanucInterp {
             }
         };
 
-        for _ in 0..repeats {
+        for hole in 0..repeats {
             let mut p = self.pos;
             for (i, v) in words.iter().enumerate() {
                 if let (Some(v), true) = (v, i != n) {
@@ -236,6 +236,13 @@ impl FanucInterp {
                     };
                     drill(&c, out);
                 }
+            }
+            let tapping =
+                matches!(body, Body::Rigid { .. }) || matches!(drill_kind(code), DrillKind::Tap { .. });
+            if tapping && hole + 1 < repeats {
+                // Single block stops where a held-over feed hold does: back at R after each
+                // hole of a K repeat (FAN-CYC-09, FAN-RT-15).
+                out.push(Step::SingleBlockStop);
             }
             if self.ret_initial && p[n] != self.initial {
                 p[n] = self.initial;

@@ -456,6 +456,11 @@ impl GskInterp {
                 },
                 steps,
             );
+            if n + 1 < k {
+                // Single block stops where a held-over feed hold does: when the return of each
+                // hole is complete, not only after the last (seed 000 注意事项 6, GSK-RT-27).
+                steps.push(Step::SingleBlockStop);
+            }
             if let Some(a) = clamp {
                 steps.push(Step::Function { letter: 'M', code: a + 1, effect: SpindleEffect::None });
             }
@@ -552,11 +557,18 @@ impl Interpreter for GskInterp {
         for (code, word) in m_codes {
             self.mcode_steps(&w, code, &word, &mut pre, &mut post)?;
         }
-        let targets = self.targets(&w)?;
+        let mut targets = self.targets(&w)?;
+        if matches!(nonmodal, Some((40, _))) {
+            // G04's X/U are the dwell in seconds, not an axis target (GSK-LEX-08): they move
+            // nothing, so they are no axis move after M29 either (seed 000 注2, GSK-RT-12).
+            targets[0] = None;
+        }
         let moves = targets.iter().any(Option::is_some);
         // An axis move between M29 and the tapping block, the M29 block included (GSK-RT-12).
         if self.m29_pending && moves && cycle_g.is_none() {
-            let word = ['X', 'U', 'Z', 'W', 'C', 'H'].iter().find_map(|&l| w.get(l)).unwrap();
+            let letters: &[char] =
+                if targets[0].is_some() { &['X', 'U', 'Z', 'W', 'C', 'H'] } else { &['Z', 'W', 'C', 'H'] };
+            let word = letters.iter().find_map(|&l| w.get(l)).unwrap();
             return Err(w.alarm(
                 AlarmKind::AxisMoveAfterM29,
                 &word,
