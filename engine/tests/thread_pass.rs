@@ -375,3 +375,21 @@ const G923_BEFORE: u64 = 4809895225600197577;
 const TAPER_BEFORE: u64 = 6290682639909171455;
 const RETRACT_BEFORE: u64 = 3491550399745240082;
 const C832_BEFORE: u64 = 11174102450272644338;
+
+#[test]
+fn a_pass_that_finds_the_spindle_stalled_raises_its_dialects_alarm() {
+    // The pass carries its dialect's alarm: LinuxCNC's "Spindle not turning" (NC-1095), GSK's and
+    // KND's 0011, Heidenhain's NC-1017.
+    let stall = || InputSchedule::default().at(600_000, Input::SpindleStall(true));
+    let cases = [
+        ("linuxcnc", "G18 G21 M3 S600\nG4 P0.7\nG33 Z-20 K1.5\nM2\n", "NC-1095"),
+        ("linuxcnc", "G18 G21 M3 S600\nG0 X7 Z3\nG4 P0.7\nG76 P1.5 Z-20 I-1 J0.25 K0.92\nM2\n", "NC-1095"),
+        ("knd-lathe", "G00 X30 Z5;\nM03 S600;\nG04 P700;\nG32 Z-20 F2;\nM30;\n", "0011"),
+        ("gsk-lathe", "G0 X40 Z5;\nM03 S500;\nG04 P700;\nG92.3 X36 Z-20 F4 E1 Q0.5 A1;\nM30;\n", "0011"),
+    ];
+    for (dialect, prog, code) in cases {
+        let t = run(dialect, &[], prog, &sampled(stall()));
+        let codes: Vec<&str> = t.alarms().map(|(_, a)| a.kind.code()).collect();
+        assert_eq!(codes, [code], "{dialect}: {}", support::events(&t));
+    }
+}

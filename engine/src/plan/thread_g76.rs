@@ -141,7 +141,7 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
             phase_rev: 0.0,
             law: PassLaw::Accelerated { room: None },
             retract: None,
-            alarm: AlarmKind::FeedZero,
+            alarm: AlarmKind::LcncSpindle,
         }));
     }
     out.push(Step::HoldSuppress(false));

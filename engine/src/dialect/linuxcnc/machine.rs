@@ -585,7 +585,7 @@ impl Machine {
             [v[0], v[1]]
         };
         if let Some(pass) = ThreadPass::line(self.pos, t, longest([0, 1, 2]), lead as f64, true) {
-            out.push(Step::Thread(pass));
+            out.push(Step::Thread(ThreadPass { alarm: AlarmKind::LcncSpindle, ..pass }));
         }
         out.push(Step::HoldSuppress(false));
         out.push(Step::Phase(Phase::Idle));
