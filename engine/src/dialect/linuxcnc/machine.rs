@@ -455,6 +455,15 @@ impl Machine {
     fn motion_of(&mut self, b: &Eb, out: &mut Vec<Step>) -> Result<(), Alarm> {
         let explicit = b.g.iter().find(|(g, _)| MOTION_G.contains(g)).map(|(g, _)| *g);
         let uses_axes = b.has_g(920) || b.has_g(40);
+        // A rotary word with a canned cycle to be (interp_check.cc check_other_codes).
+        let rotary = ['A', 'B', 'C'].into_iter().find(|l| b.get(*l).is_some());
+        if let (Some(l), Some(g)) = (rotary, explicit.or(self.motion)) {
+            if cycles::is_cycle(g) {
+                let article = if l == 'A' { "an" } else { "a" };
+                let text = format!("Cannot put {article} {} in canned cycle", l.to_ascii_lowercase());
+                return Err(alarm(AlarmKind::LcncInterpreter, text, b.line, b.col(l)));
+            }
+        }
         if explicit == Some(800) {
             if b.has_axis() {
                 return Err(alarm(
@@ -576,6 +585,7 @@ impl Machine {
         let lead = self.lead(b)?;
         self.spindle_turning("G33", b)?;
         let t = self.machine(self.target(b)?);
+        out.push(Step::AwaitAtSpeed);
         out.push(Step::HoldSuppress(true));
         out.push(Step::Phase(Phase::Cutting));
         out.push(Step::Feed { target: t, feed: Feed::PerRev(lead as f64) });
@@ -607,6 +617,8 @@ impl Machine {
         }
         let rpm = self.s.round().min(self.cfg.max_rpm) as u32;
         let brake_us = (rpm as f64 / self.cfg.max_rpm * self.cfg.ramp_us as f64) as Micros;
+        // LinuxCNC's motion controller starts a synchronised move with the spindle at speed.
+        out.push(Step::AwaitAtSpeed);
         follow_tap(
             &FollowTap {
                 axis: 2,
