@@ -81,7 +81,7 @@ fn same(a: &Move, b: &Move) -> bool {
 
 /// The differences between rs274's moves and the engine's, each at a program line: hunks of a
 /// longest-common-subsequence alignment, each described.
-fn move_differences(want: &[Move], got: &[Move]) -> Vec<(u32, String)> {
+fn move_differences(want: &[Move], got: &[Move], refused_at: Option<u32>) -> Vec<(u32, String)> {
     let (n, m) = (want.len(), got.len());
     let mut lcs = vec![vec![0u32; m + 1]; n + 1];
     for i in (0..n).rev() {
@@ -113,8 +113,13 @@ fn move_differences(want: &[Move], got: &[Move]) -> Vec<(u32, String)> {
                 i += 1;
             }
         }
-        let line =
-            got[j0..j].iter().find_map(|m| m.line).or(got.get(j).and_then(|m| m.line)).unwrap_or(last_line);
+        // The hunk's line: its first engine move's, else the next one's, else the refused line's.
+        let line = got[j0..j]
+            .iter()
+            .find_map(|m| m.line)
+            .or(got.get(j).and_then(|m| m.line))
+            .or(refused_at)
+            .unwrap_or(last_line);
         let w: Vec<String> = want[i0..i].iter().map(fmt).collect();
         let g: Vec<String> = got[j0..j].iter().map(fmt).collect();
         out.push((line, format!("moves {}..{}: rs274 [{}], engine [{}]", i0, i, w.join(", "), g.join(", "))));
@@ -173,7 +178,7 @@ fn every_program_agrees_with_rs274_or_differs_under_a_decision() {
                 continue;
             }
         };
-        let mut diffs = move_differences(&want.moves, &got.moves);
+        let mut diffs = move_differences(&want.moves, &got.moves, got.refusal.as_ref().map(|r| r.line));
         diffs.extend(refusal_difference(program, &want, &got));
         if diffs.is_empty() {
             agree += 1;
@@ -257,7 +262,7 @@ fn installed_rs274_agrees_with_the_stored_canon() {
     for (name, program, canon) in cases() {
         let stored = parse_canon(&canon);
         let now = parse_canon(&run_rs274(&rs274, &name));
-        let mut d = move_differences(&stored.moves, &now.moves);
+        let mut d = move_differences(&stored.moves, &now.moves, None);
         if stored.refusal.as_ref().map(|r| (&r.text, &r.message))
             != now.refusal.as_ref().map(|r| (&r.text, &r.message))
         {

@@ -56,6 +56,14 @@ pub fn canned(m: &mut Machine, g: u32, b: &Eb, out: &mut Vec<Step>) -> Result<()
         None if same => m.cyc.r,
         None => return Err(err(AlarmKind::LcncRUnspecified, "R clearance plane unspecified in cycle", None)),
     };
+    if g == 740 && b.get('L').is_some() {
+        // LinuxCNC counts G74 out of the cycles that take L (interp_check.cc, G81..G89 and G73).
+        return Err(err(
+            AlarmKind::LcncInterpreter,
+            "L word with no G10, cutter compensation, canned cycle, digital/analog input, M98 or NURBS code",
+            b.col('L'),
+        ));
+    }
     let repeats = match b.get('L') {
         Some(l) if l < 0.0 => {
             return Err(err(AlarmKind::LcncInterpreter, "Negative l word used", b.col('L')))

@@ -453,7 +453,9 @@ impl Machine {
     }
 
     fn motion_of(&mut self, b: &Eb, out: &mut Vec<Step>) -> Result<(), Alarm> {
-        let explicit = b.g.iter().find(|(g, _)| MOTION_G.contains(g)).map(|(g, _)| *g);
+        // G80 beside another motion code gives way to it (rs274 runs `G80 G0 Z10`).
+        let motions = || b.g.iter().filter(|(g, _)| MOTION_G.contains(g)).map(|(g, _)| *g);
+        let explicit = motions().find(|g| *g != 800).or_else(|| motions().next());
         let uses_axes = b.has_g(920) || b.has_g(40);
         // A rotary word with a canned cycle to be (interp_check.cc check_other_codes).
         let rotary = ['A', 'B', 'C'].into_iter().find(|l| b.get(*l).is_some());
