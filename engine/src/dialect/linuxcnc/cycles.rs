@@ -263,6 +263,11 @@ impl Body {
                     spindle_forward: self.dir >= 0,
                 };
                 drill(&cycle, out);
+                // The builder ends at R; LinuxCNC rapids from the bottom straight to the
+                // clearance level (convert_cycle_g73 / g83).
+                if matches!(out.last(), Some(Step::Rapid { target }) if *target == at_r) {
+                    out.pop();
+                }
                 m.pos = at_r;
                 m.rapid(level(at_r, clear), out);
             }
