@@ -145,7 +145,11 @@ fn refusal_difference(program: &str, want: &Outcome, got: &Outcome) -> Option<(u
         )),
         (Some(w), Some(g)) => {
             let same_line = w.text.eq_ignore_ascii_case(&g.text);
-            let same_text = g.message.to_lowercase().contains(&w.message.to_lowercase());
+            // LinuxCNC's message, or its head when it adds particulars after a colon.
+            let (msg, head) =
+                (w.message.to_lowercase(), w.message.split(": ").next().unwrap_or("").to_lowercase());
+            let engine = g.message.to_lowercase();
+            let same_text = engine.contains(&msg) || (!head.is_empty() && engine.contains(&head));
             (!same_line || !same_text).then(|| {
                 (
                     g.line,
