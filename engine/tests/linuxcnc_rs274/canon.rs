@@ -121,14 +121,16 @@ pub fn parse_canon(text: &str) -> Outcome {
     o
 }
 
-/// `   12 N..... NAME(ARGS)` → (NAME, ARGS).
+/// `   12 N..... NAME(ARGS)` or `   12 N10    NAME(ARGS)` → (NAME, ARGS).
 fn command(line: &str) -> Option<(&str, &str)> {
     let rest = line.trim_start();
     let digits = rest.find(|c: char| !c.is_ascii_digit())?;
     if digits == 0 {
         return None;
     }
-    let rest = rest[digits..].strip_prefix(" N..... ")?;
+    // `N.....`, or the line's own N number padded (`N10   `).
+    let rest = rest[digits..].strip_prefix(" N")?;
+    let rest = rest.trim_start_matches(|c: char| c.is_ascii_digit() || c == '.' || c == ' ');
     let open = rest.find('(')?;
     let args = rest[open + 1..].strip_suffix(')')?;
     Some((&rest[..open], args))
