@@ -553,6 +553,10 @@ impl Machine {
             };
             return Err(alarm(AlarmKind::LcncFeedZero, text, b.line, None));
         }
+        if self.feed_mode == FeedMode::PerRev && self.s == 0.0 {
+            let text = "Cannot feed with zero spindle speed in feed per rev mode";
+            return Err(alarm(AlarmKind::LcncFeedZero, text, b.line, None));
+        }
         Ok(())
     }
 
