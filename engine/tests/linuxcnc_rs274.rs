@@ -146,8 +146,13 @@ fn refusal_difference(program: &str, want: &Outcome, got: &Outcome) -> Option<(u
         (Some(w), Some(g)) => {
             let same_line = w.text.eq_ignore_ascii_case(&g.text);
             // LinuxCNC's message, or its head when it adds particulars after a colon.
-            let (msg, head) =
-                (w.message.to_lowercase(), w.message.split(": ").next().unwrap_or("").to_lowercase());
+            // (o-word errors start with the line number: `2: not in a subroutine definition: …`).
+            let m = w
+                .message
+                .split_once(": ")
+                .filter(|(n, _)| n.parse::<u32>().is_ok())
+                .map_or(&*w.message, |(_, m)| m);
+            let (msg, head) = (m.to_lowercase(), m.split(": ").next().unwrap_or("").to_lowercase());
             let engine = g.message.to_lowercase();
             let same_text = engine.contains(&msg) || (!head.is_empty() && engine.contains(&head));
             (!same_line || !same_text).then(|| {

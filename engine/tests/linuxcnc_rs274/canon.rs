@@ -151,7 +151,7 @@ pub fn run_engine(text: &str) -> Result<Outcome, String> {
     let mut alarm = None;
     for e in &trace.events {
         match &e.event {
-            Event::Block { line, .. } => last_block = Some(*line),
+            Event::Block { line, text } => last_block = Some((*line, text.clone())),
             Event::Alarm(a) => {
                 alarm = Some((a.clone(), last_block));
                 break;
@@ -165,15 +165,15 @@ pub fn run_engine(text: &str) -> Result<Outcome, String> {
     let mut cur = [0.0; 3];
     let nm = |v: i64| v as f64 / 1e6;
     for b in &program.blocks {
-        if let Some((_, Some(stop))) = &alarm {
-            if b.line == *stop {
+        if let Some((_, Some((line, text)))) = &alarm {
+            if b.line == *line && b.text == *text {
                 break;
             }
         }
         let mut steps = Vec::new();
         if let Err(a) = interp.block(b, &mut steps) {
             if alarm.is_none() {
-                alarm = Some((a, Some(b.line)));
+                alarm = Some((a, Some((b.line, b.text.clone()))));
             }
             break;
         }

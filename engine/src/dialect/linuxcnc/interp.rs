@@ -168,7 +168,7 @@ impl LcncInterp {
                 Ctrl::Continue => return Ok(Flow::Continue),
                 Ctrl::Return(v) | Ctrl::EndSub(v) => {
                     if self.depth == 0 {
-                        return Err(Self::err(l.line, "Return outside of subroutine"));
+                        return Err(Self::err(l.line, "not in a subroutine definition"));
                     }
                     self.returned = v.as_ref().map(|v| self.value(v, l.line)).transpose()?;
                     return Ok(Flow::Return);
