@@ -57,6 +57,9 @@ pub trait Interpreter {
     fn rigid_mode(&self) -> bool;
     /// A parameter changed while running: read the new values (modal state stays).
     fn set_params(&mut self, params: &Params);
+    /// The whole program, once, before its first block: a dialect whose calls look ahead in the
+    /// file (LinuxCNC's subroutines defined after the main program, `M98` subprograms) keeps it.
+    fn program(&mut self, _program: &crate::parse::Program) {}
 }
 
 /// Every dialect.

@@ -147,8 +147,10 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
     sink.start(&meta);
     let accel = cfg.spindle_max_rpm as f64 / (cfg.spindle_ramp_us.max(1)) as f64;
     let diameter_x = meta.axes.iter().any(|a| a.diameter);
+    let mut interp = machine.dialect.interpreter(&machine.params);
+    interp.program(program);
     let mut ex = Exec {
-        interp: machine.dialect.interpreter(&machine.params),
+        interp,
         plc: Plc::new(cfg.plc),
         cfg,
         opts,

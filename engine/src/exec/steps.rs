@@ -157,6 +157,12 @@ impl Exec<'_> {
                 }
             }
             Step::OverrideLock(b) => self.override_locked = b,
+            Step::AwaitAtSpeed => {
+                if self.spindle.ramp(now).is_some() {
+                    let end = self.spindle.ramp_end().max(now + 1);
+                    self.active = Active::Until(ceil_to(end, self.cfg.period_us));
+                }
+            }
             Step::Css(c) => self.css_set(c),
             Step::Overload(w) => {
                 self.overload = w;

@@ -283,6 +283,10 @@ pub enum Step {
     /// Feed and spindle overrides held at 100 % (true) or honoured again (false), feed hold
     /// still honoured (LinuxCNC `DISABLE_FEED_OVERRIDE` / `DISABLE_SPEED_OVERRIDE` in G84/G74).
     OverrideLock(bool),
+    /// Waits until the spindle has reached its commanded speed (a speed change under way has
+    /// ended); goes on at once when it has (LinuxCNC's spindle at-speed before a spindle-
+    /// synchronised move: G33, G33.1).
+    AwaitAtSpeed,
 }
 
 /// Most pecks a cycle builder plans at once: a hole of more pecks ends its first chunk with a

@@ -56,6 +56,14 @@ pub fn canned(m: &mut Machine, g: u32, b: &Eb, out: &mut Vec<Step>) -> Result<()
         None if same => m.cyc.r,
         None => return Err(err(AlarmKind::LcncRUnspecified, "R clearance plane unspecified in cycle", None)),
     };
+    if g == 740 && b.get('L').is_some() {
+        // LinuxCNC counts G74 out of the cycles that take L (interp_check.cc, G81..G89 and G73).
+        return Err(err(
+            AlarmKind::LcncInterpreter,
+            "L word with no G10, cutter compensation, canned cycle, digital/analog input, M98 or NURBS code",
+            b.col('L'),
+        ));
+    }
     let repeats = match b.get('L') {
         Some(l) if l < 0.0 => {
             return Err(err(AlarmKind::LcncInterpreter, "Negative l word used", b.col('L')))
@@ -97,24 +105,28 @@ pub fn canned(m: &mut Machine, g: u32, b: &Eb, out: &mut Vec<Step>) -> Result<()
         m.machine(w)
     };
     out.push(Step::Phase(Phase::Positioning));
+    let mut current_cc = current_cc;
     if old_cc < r {
         let t = at(m, m.work(ia), m.work(ib), r);
         m.rapid(t, out);
         old_cc = r;
+        current_cc = r;
     }
     let clear = if m.old_z { old_cc } else { r };
-    for _ in 0..repeats {
+    for n in 0..repeats {
         aa = aa.saturating_add(inc[0]);
         bb = bb.saturating_add(inc[1]);
         out.push(Step::Phase(Phase::Positioning));
-        let t = at(m, aa, bb, old_cc);
+        // LCNC-CYC-03: the first hole is reached at the present level when above R; every
+        // other positioning move runs at the clearance level (CYCLE_MACRO).
+        let level = if n == 0 && current_cc > r { current_cc } else { clear };
+        let t = at(m, aa, bb, level);
         m.rapid(t, out);
-        if old_cc != r {
+        if level > r {
             let t = at(m, aa, bb, r);
             m.rapid(t, out);
         }
         body.emit(m, ic, at(m, aa, bb, r), bottom, clear, out);
-        old_cc = clear;
     }
     out.push(Step::Phase(Phase::Idle));
     m.cyc.cc = cc_word;
@@ -251,6 +263,11 @@ impl Body {
                     spindle_forward: self.dir >= 0,
                 };
                 drill(&cycle, out);
+                // The builder ends at R; LinuxCNC rapids from the bottom straight to the
+                // clearance level (convert_cycle_g73 / g83).
+                if matches!(out.last(), Some(Step::Rapid { target }) if *target == at_r) {
+                    out.pop();
+                }
                 m.pos = at_r;
                 m.rapid(level(at_r, clear), out);
             }

@@ -40,7 +40,16 @@ pub struct Store {
 impl Store {
     /// An empty store with the main program's frame.
     pub fn new() -> Self {
-        Store { locals: vec![BTreeMap::new()], ..Store::default() }
+        let mut s = Store { locals: vec![BTreeMap::new()], ..Store::default() };
+        s.set_returned(None);
+        s
+    }
+
+    /// What the last subroutine returned: `#<_value>` (0 when it returned nothing) and
+    /// `#<_value_returned>`.
+    pub fn set_returned(&mut self, v: Option<f64>) {
+        self.globals.insert("_value".into(), v.unwrap_or(0.0));
+        self.globals.insert("_value_returned".into(), f64::from(u8::from(v.is_some())));
     }
 
     /// Opens a subroutine frame: `#1..#30` take the call's arguments (the caller's are returned

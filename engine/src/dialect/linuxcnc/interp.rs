@@ -54,6 +54,10 @@ pub struct LcncInterp {
     gather: Option<Gather>,
     depth: usize,
     budget: u64,
+    /// Every line of the program, for subroutines defined after their call and `M98`.
+    program: Vec<Line>,
+    /// The value of the `return` / `endsub` that ended the present call.
+    returned: Option<f64>,
 }
 
 impl LcncInterp {
@@ -66,6 +70,8 @@ impl LcncInterp {
             gather: None,
             depth: 0,
             budget: 0,
+            program: Vec::new(),
+            returned: None,
         }
     }
 
@@ -80,9 +86,12 @@ impl LcncInterp {
             let l = &lines[i];
             self.tick(l.line, out)?;
             let Some(o) = &l.oword else {
-                self.plain(l, out)?;
+                let flow = self.plain(l, out)?;
                 if self.m.ended {
                     return Ok(Flow::End);
+                }
+                if flow != Flow::Normal {
+                    return Ok(flow);
                 }
                 i += 1;
                 continue;
@@ -96,8 +105,12 @@ impl LcncInterp {
             };
             match &o.ctrl {
                 Ctrl::Sub => {
-                    let end = end_of(&|c| matches!(c, Ctrl::EndSub))?;
-                    self.subs.insert(o.label.clone(), lines[i + 1..end].to_vec());
+                    let end = end_of(&|c| matches!(c, Ctrl::EndSub(_)))?;
+                    if let Some(n) = lines[i + 1..end].iter().find(|x| is_sub(x)) {
+                        return Err(Self::err(n.line, "Nested subroutine definition"));
+                    }
+                    // The body ends with its `endsub` (which may return a value).
+                    self.subs.insert(o.label.clone(), lines[i + 1..=end].to_vec());
                     i = end + 1;
                 }
                 Ctrl::If(_) => {
@@ -153,10 +166,11 @@ impl LcncInterp {
                 }
                 Ctrl::Break => return Ok(Flow::Break),
                 Ctrl::Continue => return Ok(Flow::Continue),
-                Ctrl::Return | Ctrl::EndSub => {
+                Ctrl::Return(v) | Ctrl::EndSub(v) => {
                     if self.depth == 0 {
-                        return Err(Self::err(l.line, "Return outside of subroutine"));
+                        return Err(Self::err(l.line, "not in a subroutine definition"));
                     }
+                    self.returned = v.as_ref().map(|v| self.value(v, l.line)).transpose()?;
                     return Ok(Flow::Return);
                 }
                 Ctrl::Call(args) => {
@@ -216,6 +230,9 @@ impl LcncInterp {
         line: u32,
         out: &mut Vec<Step>,
     ) -> Result<Flow, Alarm> {
+        if !self.subs.contains_key(label) {
+            self.define_later(label)?;
+        }
         let Some(body) = self.subs.get(label).cloned() else {
             let text =
                 if label.starts_with('<') { "Named oword not defined" } else { "Unknown oword number" };
@@ -227,9 +244,12 @@ impl LcncInterp {
         let values = args.iter().map(|a| self.value(a, line)).collect::<Result<Vec<f64>, Alarm>>()?;
         let saved = self.store.enter(&values);
         self.depth += 1;
+        self.returned = None;
         let flow = self.run_lines(&body, out);
         self.depth -= 1;
         self.store.leave(&saved);
+        let returned = self.returned.take();
+        self.store.set_returned(returned);
         match flow? {
             Flow::End => Ok(Flow::End),
             Flow::Break | Flow::Continue => Err(Self::err(line, "break or continue outside a loop")),
@@ -245,17 +265,83 @@ impl LcncInterp {
         Ok(self.value(e, line)? != 0.0)
     }
 
-    /// A line of words and parameter settings.
-    fn plain(&mut self, l: &Line, out: &mut Vec<Step>) -> Result<(), Alarm> {
+    /// A subroutine called before its definition: LinuxCNC reads on in the file for it.
+    fn define_later(&mut self, label: &str) -> Result<(), Alarm> {
+        let is_end = |x: &Line| {
+            x.oword.as_ref().is_some_and(|o| o.label == label && matches!(o.ctrl, Ctrl::EndSub(_)))
+        };
+        let start = self
+            .program
+            .iter()
+            .position(|x| x.oword.as_ref().is_some_and(|o| o.label == label && matches!(o.ctrl, Ctrl::Sub)));
+        let Some(start) = start else { return Ok(()) };
+        let Some(len) = self.program[start + 1..].iter().position(is_end) else { return Ok(()) };
+        let body = &self.program[start + 1..=start + 1 + len];
+        if let Some(n) = body.iter().find(|x| is_sub(x)) {
+            return Err(Self::err(n.line, "Nested subroutine definition"));
+        }
+        self.subs.insert(label.to_string(), body.to_vec());
+        Ok(())
+    }
+
+    /// `M98 P<n> L<count>`: runs the lines after the program number `O<n>` up to its `M99`,
+    /// `count` times, with the caller's parameters (Fanuc-style: no local `#1..#30`).
+    fn subprogram(&mut self, n: f64, count: f64, line: u32, out: &mut Vec<Step>) -> Result<Flow, Alarm> {
+        let number = n.round() as u32;
+        let start = self.program.iter().position(|x| x.number == Some(number) && n >= 0.0);
+        let Some(start) = start else {
+            return Err(Self::err(line, format!("Unknown subprogram O{number} called by M98")));
+        };
+        let m99 =
+            |x: &Line| x.words.iter().any(|w| w.letter == 'M' && w.value == super::ngc::Expr::Num(99.0));
+        let Some(len) = self.program[start + 1..].iter().position(m99) else {
+            return Err(Self::err(line, format!("Subprogram O{number} has no M99")));
+        };
+        let body = self.program[start + 1..=start + 1 + len].to_vec();
+        if self.depth >= MAX_DEPTH {
+            return Err(Self::err(line, "Too many subroutine levels"));
+        }
+        for _ in 0..count.round().max(0.0) as u64 {
+            self.tick(line, out)?;
+            self.depth += 1;
+            let flow = self.run_lines(&body, out);
+            self.depth -= 1;
+            if flow? == Flow::End {
+                return Ok(Flow::End);
+            }
+        }
+        Ok(Flow::Normal)
+    }
+
+    /// A line of words and parameter settings; `M98` calls a subprogram after the line's other
+    /// words, `M99` returns from one.
+    fn plain(&mut self, l: &Line, out: &mut Vec<Step>) -> Result<Flow, Alarm> {
         let sys = self.m.system();
         let mut eb = Eb::new(l.line);
+        let mut words = Vec::with_capacity(l.words.len());
         for w in &l.words {
             let v = self
                 .store
                 .eval(&w.value, &sys)
                 .map_err(|t| alarm(AlarmKind::LcncInterpreter, t, l.line, Some(w.col)))?;
-            eb.push(w.letter, v, w.col)
-                .map_err(|t| alarm(AlarmKind::LcncInterpreter, t, l.line, Some(w.col)))?;
+            words.push((w.letter, v, w.col));
+        }
+        let has_m = |n: f64| words.iter().any(|&(c, v, _)| c == 'M' && v == n);
+        let (m98, m99) = (has_m(98.0), has_m(99.0));
+        let (mut p, mut count) = (None, 1.0);
+        for &(letter, v, col) in &words {
+            if letter == 'M' && (v == 98.0 || v == 99.0) {
+                continue;
+            }
+            if m98 && letter == 'P' {
+                p = Some(v);
+                continue;
+            }
+            if m98 && letter == 'L' {
+                count = v;
+                continue;
+            }
+            eb.push(letter, v, col).map_err(|t| alarm(AlarmKind::LcncInterpreter, t, l.line, Some(col)))?;
         }
         // Settings take effect after the whole line is read (RS274NGC), before it runs.
         let mut sets = Vec::with_capacity(l.sets.len());
@@ -272,7 +358,23 @@ impl LcncInterp {
                 }
             }
         }
-        self.m.run(&eb, out)
+        self.m.run(&eb, out)?;
+        if m98 {
+            let Some(p) = p else { return Err(Self::err(l.line, "P word missing with M98")) };
+            return self.subprogram(p, count, l.line, out);
+        }
+        if m99 {
+            if self.depth == 0 {
+                return Err(alarm(
+                    AlarmKind::NotModelled,
+                    "M99 in the main program (an endless program loop) is not modelled",
+                    l.line,
+                    None,
+                ));
+            }
+            return Ok(Flow::Return);
+        }
+        Ok(Flow::Normal)
     }
 }
 
@@ -285,11 +387,15 @@ impl Interpreter for LcncInterp {
         let line = parse_line(&block.text, block.line)
             .map_err(|e| Self::err(e.line, e.message).at(e.line, Some(e.col)))?;
         if let Some(g) = &mut self.gather {
+            if is_sub(&g.lines[0]) && is_sub(&line) {
+                self.gather = None;
+                return Err(Self::err(line.line, "Nested subroutine definition"));
+            }
             let closes = line.oword.as_ref().is_some_and(|o| {
                 o.label == g.label
                     && matches!(
                         o.ctrl,
-                        Ctrl::EndSub | Ctrl::EndIf | Ctrl::EndWhile | Ctrl::EndRepeat | Ctrl::While(_)
+                        Ctrl::EndSub(_) | Ctrl::EndIf | Ctrl::EndWhile | Ctrl::EndRepeat | Ctrl::While(_)
                     )
             });
             let is_do = g.lines[0].oword.as_ref().is_some_and(|o| matches!(o.ctrl, Ctrl::Do));
@@ -336,6 +442,20 @@ impl Interpreter for LcncInterp {
     fn set_params(&mut self, params: &Params) {
         self.m.cfg = super::machine::Cfg::from(params);
     }
+
+    fn program(&mut self, program: &crate::parse::Program) {
+        self.program = program
+            .blocks
+            .iter()
+            .filter(|b| b.text != END_OF_FILE)
+            .filter_map(|b| parse_line(&b.text, b.line).ok())
+            .collect();
+    }
+}
+
+/// Whether a line starts a subroutine definition.
+fn is_sub(l: &Line) -> bool {
+    l.oword.as_ref().is_some_and(|o| matches!(o.ctrl, Ctrl::Sub))
 }
 
 /// G2/G3 (LCNC-MOD-02): centre by I/J/K offsets (absolute under G90.1) or by radius R, in the

@@ -325,9 +325,11 @@ impl Machine {
         }
         for &(m, col) in &b.m {
             if NOT_MODELLED_M.contains(&m) || m >= 100 {
+                // rs274 without the machine's user M code files: "Unknown m code used: M123".
+                let user = if m >= 100 { format!("Unknown m code used: M{m}; ") } else { String::new() };
                 return Err(alarm(
                     AlarmKind::NotModelled,
-                    format!("M{m} is not modelled by the linuxcnc dialect"),
+                    format!("{user}M{m} is not modelled by the linuxcnc dialect"),
                     b.line,
                     Some(col),
                 ));
@@ -453,8 +455,24 @@ impl Machine {
     }
 
     fn motion_of(&mut self, b: &Eb, out: &mut Vec<Step>) -> Result<(), Alarm> {
-        let explicit = b.g.iter().find(|(g, _)| MOTION_G.contains(g)).map(|(g, _)| *g);
+        // G80 beside another motion code gives way to it (rs274 runs `G80 G0 Z10`).
+        let motions = || b.g.iter().filter(|(g, _)| MOTION_G.contains(g)).map(|(g, _)| *g);
+        let explicit = motions().find(|g| *g != 800).or_else(|| motions().next());
         let uses_axes = b.has_g(920) || b.has_g(40);
+        // A motion code that needs axis words (interp_internal.cc enhance_block).
+        let axis_words = b.has_axis() || ['A', 'B', 'C'].into_iter().any(|l| b.get(l).is_some());
+        if explicit.is_some_and(|g| !matches!(g, 0 | 10 | 20 | 30 | 800)) && !axis_words {
+            return Err(alarm(AlarmKind::LcncInterpreter, "All axes missing with motion code", b.line, None));
+        }
+        // A rotary word with a canned cycle to be (interp_check.cc check_other_codes).
+        let rotary = ['A', 'B', 'C'].into_iter().find(|l| b.get(*l).is_some());
+        if let (Some(l), Some(g)) = (rotary, explicit.or(self.motion)) {
+            if cycles::is_cycle(g) {
+                let article = if l == 'A' { "an" } else { "a" };
+                let text = format!("Cannot put {article} {} in canned cycle", l.to_ascii_lowercase());
+                return Err(alarm(AlarmKind::LcncInterpreter, text, b.line, b.col(l)));
+            }
+        }
         if explicit == Some(800) {
             if b.has_axis() {
                 return Err(alarm(
@@ -542,6 +560,10 @@ impl Machine {
             };
             return Err(alarm(AlarmKind::LcncFeedZero, text, b.line, None));
         }
+        if self.feed_mode == FeedMode::PerRev && self.s == 0.0 {
+            let text = "Cannot feed with zero spindle speed in feed per rev mode";
+            return Err(alarm(AlarmKind::LcncFeedZero, text, b.line, None));
+        }
         Ok(())
     }
 
@@ -576,6 +598,7 @@ impl Machine {
         let lead = self.lead(b)?;
         self.spindle_turning("G33", b)?;
         let t = self.machine(self.target(b)?);
+        out.push(Step::AwaitAtSpeed);
         out.push(Step::HoldSuppress(true));
         out.push(Step::Phase(Phase::Cutting));
         // Synchronised from the next index pulse on (LCNC-G33-02), K along the path.
@@ -615,6 +638,8 @@ impl Machine {
         }
         let rpm = self.s.round().min(self.cfg.max_rpm) as u32;
         let brake_us = (rpm as f64 / self.cfg.max_rpm * self.cfg.ramp_us as f64) as Micros;
+        // LinuxCNC's motion controller starts a synchronised move with the spindle at speed.
+        out.push(Step::AwaitAtSpeed);
         follow_tap(
             &FollowTap {
                 axis: 2,
@@ -649,7 +674,10 @@ impl Machine {
             return Err(missing("I J or K words missing with G76"));
         };
         let Some(z) = b.get('Z') else { return Err(missing("Z word missing with G76")) };
-        self.spindle_turning("G76", b)?;
+        if self.spindle == 0 || self.s <= 0.0 {
+            let text = "Chosen spindle (0) not turning in G76";
+            return Err(alarm(AlarmKind::LcncSpindle, text, b.line, None));
+        }
         let r = b.get('R').unwrap_or(1.0);
         let q = b.get('Q').unwrap_or(0.0);
         let h = b.get('H').unwrap_or(0.0);

@@ -133,11 +133,11 @@ pub enum Ctrl {
     /// `sub`.
     Sub,
     /// `endsub [value]`.
-    EndSub,
+    EndSub(Option<Expr>),
     /// `call [a][b]...`.
     Call(Vec<Expr>),
     /// `return [value]`.
-    Return,
+    Return(Option<Expr>),
     /// `if [cond]`.
     If(Expr),
     /// `elseif [cond]`.
@@ -180,6 +180,9 @@ pub struct Line {
     pub block_delete: bool,
     /// The o-word, when the line is a control line.
     pub oword: Option<OWord>,
+    /// A bare `O` number (`O0001`, `O5`): the program's number, or the label of a Fanuc-style
+    /// subprogram that `M98 P5` runs up to its `M99`.
+    pub number: Option<u32>,
     /// Words in order.
     pub words: Vec<NWord>,
     /// Parameter settings, applied after the line's words are read.
@@ -189,7 +192,7 @@ pub struct Line {
 impl Line {
     /// Whether the line does anything.
     pub fn is_empty(&self) -> bool {
-        self.oword.is_none() && self.words.is_empty() && self.sets.is_empty()
+        self.oword.is_none() && self.number.is_none() && self.words.is_empty() && self.sets.is_empty()
     }
 }
 
@@ -286,7 +289,12 @@ pub fn parse_line(text: &str, line: u32) -> Result<Line, ParseError> {
     c.skip_blanks();
     if c.peek().is_some_and(|ch| ch.eq_ignore_ascii_case(&'o')) {
         c.i += 1;
+        let at = c.i;
         out.oword = oword(&mut c)?;
+        if out.oword.is_none() {
+            let digits: String = c.chars[at..c.i].iter().filter(|ch| ch.is_ascii_digit()).collect();
+            out.number = digits.parse().ok();
+        }
     }
     loop {
         c.skip_blanks();
@@ -391,8 +399,7 @@ fn oword(c: &mut Cur) -> Result<Option<OWord>, ParseError> {
     }
     // Longest keywords first: `endsub` before `end...`, `elseif` before `else`.
     let ctrl = if c.keyword("endsub") {
-        let _ = opt_bracket(c)?;
-        Ctrl::EndSub
+        Ctrl::EndSub(opt_bracket(c)?)
     } else if c.keyword("endwhile") {
         Ctrl::EndWhile
     } else if c.keyword("endrepeat") {
@@ -407,13 +414,19 @@ fn oword(c: &mut Cur) -> Result<Option<OWord>, ParseError> {
         Ctrl::Sub
     } else if c.keyword("call") {
         let mut args = Vec::new();
-        while let Some(e) = opt_bracket(c)? {
+        loop {
+            // A comment may stand between two arguments (LinuxCNC's flowsnake test).
+            c.skip_blanks();
+            if c.peek() == Some('(') {
+                comment(c)?;
+                continue;
+            }
+            let Some(e) = opt_bracket(c)? else { break };
             args.push(e);
         }
         Ctrl::Call(args)
     } else if c.keyword("return") {
-        let _ = opt_bracket(c)?;
-        Ctrl::Return
+        Ctrl::Return(opt_bracket(c)?)
     } else if c.keyword("if") {
         Ctrl::If(bracket(c)?)
     } else if c.keyword("while") {
@@ -650,7 +663,14 @@ mod tests {
             parse_line("O52 ELSEIF [#1 GT 0.5]", 1).unwrap().oword.unwrap().ctrl,
             Ctrl::ElseIf(_)
         ));
-        assert!(matches!(parse_line("o100 endsub", 1).unwrap().oword.unwrap().ctrl, Ctrl::EndSub));
+        assert!(matches!(parse_line("o100 endsub", 1).unwrap().oword.unwrap().ctrl, Ctrl::EndSub(None)));
+        assert!(matches!(
+            parse_line("o100 return [2*3]", 1).unwrap().oword.unwrap().ctrl,
+            Ctrl::Return(Some(_))
+        ));
+        let l = parse_line("o<f> call [1] (a comment) [2]", 1).unwrap();
+        assert!(matches!(l.oword.unwrap().ctrl, Ctrl::Call(ref a) if a.len() == 2));
+        assert_eq!(parse_line("O0005", 1).unwrap().number, Some(5));
     }
 
     #[test]
