@@ -162,8 +162,15 @@ impl Exec<'_> {
             Some(Path::Rapid { .. }) => (0..crate::trace::AXES)
                 .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
                 .fold(f64::INFINITY, f64::min),
-            Some(Path::Tap { lead, .. }) => {
+            // A rigid tapping stroke on its profile; a tap following a spindle in speed mode
+            // (G93, G33.1 return) at the spindle's ramp, within the axis' own acceleration.
+            Some(Path::Tap { lead, .. }) if self.spindle.position_mode => {
                 self.cfg.rigid_max_rpm.max(1) as f64 / self.cfg.rigid_ramp_us.max(1) as f64 * lead / 60e6
+            }
+            Some(Path::Tap { lead, .. }) => {
+                let a_rpm = self.cfg.spindle_max_rpm.max(1) as f64 / self.cfg.spindle_ramp_us.max(1) as f64;
+                (a_rpm * lead / 60e6)
+                    .min(self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64)
             }
             Some(_) => self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64,
             None => 0.0,
