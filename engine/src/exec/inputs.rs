@@ -109,6 +109,9 @@ impl Exec<'_> {
                 }
             }
             Input::PlcAnswer { answer, extra_us } => self.plc.set_fault(answer, extra_us),
+            // Releasing a stall that is not in force changes nothing (it used to stop the
+            // spindle at once and ramp it up again: found by the physics invariants, INV-12).
+            Input::SpindleStall(false) if !self.spindle.stalled => {}
             Input::SpindleStall(b) => {
                 let (a, _) = self.spindle.at(self.now);
                 let target = self.spindle.target;
@@ -140,16 +143,7 @@ impl Exec<'_> {
     /// for cycle start and carries on with the rest of the move.
     fn feed_hold_now(&mut self) {
         let period = self.cfg.period_us;
-        let a = match self.motion.as_ref().map(|m| &m.path) {
-            Some(Path::Rapid { .. }) => (0..crate::trace::AXES)
-                .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
-                .fold(f64::INFINITY, f64::min),
-            Some(Path::Tap { lead, .. }) => {
-                self.cfg.rigid_max_rpm.max(1) as f64 / self.cfg.rigid_ramp_us.max(1) as f64 * lead / 60e6
-            }
-            Some(_) => self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64,
-            None => 0.0,
-        };
+        let a = self.stop_rate();
         if let Some(m) = &mut self.motion {
             // Decelerate along the path, then wait; cycle start carries out the rest of the move.
             m.stop_at(self.now, a, period);
@@ -158,6 +152,29 @@ impl Exec<'_> {
             }
         }
         self.hold_requested = true;
+    }
+
+    /// The deceleration (nm/µs² along the path) with which the present motion stops: a rapid at
+    /// the lowest rapid rate / time constant, a tapping stroke on its rigid tapping profile, any
+    /// other motion at the cutting feed's.
+    fn stop_rate(&self) -> f64 {
+        match self.motion.as_ref().map(|m| &m.path) {
+            Some(Path::Rapid { .. }) => (0..crate::trace::AXES)
+                .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
+                .fold(f64::INFINITY, f64::min),
+            // A rigid tapping stroke on its profile; a tap following a spindle in speed mode
+            // (G93, G33.1 return) at the spindle's ramp, within the axis' own acceleration.
+            Some(Path::Tap { lead, .. }) if self.spindle.position_mode => {
+                self.cfg.rigid_max_rpm.max(1) as f64 / self.cfg.rigid_ramp_us.max(1) as f64 * lead / 60e6
+            }
+            Some(Path::Tap { lead, .. }) => {
+                let a_rpm = self.cfg.spindle_max_rpm.max(1) as f64 / self.cfg.spindle_ramp_us.max(1) as f64;
+                (a_rpm * lead / 60e6)
+                    .min(self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64)
+            }
+            Some(_) => self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64,
+            None => 0.0,
+        }
     }
 
     pub(super) fn hold_force(&mut self) {
@@ -182,28 +199,53 @@ impl Exec<'_> {
     /// CNC reset: motion stops, rigid tapping is cancelled, the spindle returns to its state
     /// before M29, the program ends.
     fn reset(&mut self) {
-        self.stop_motion_now();
+        // The motion decelerates to a stop at its own limits (issue 12: it used to stop at once,
+        // INV-11, INV-12); `finish` lets it come to rest before it restores the spindle.
+        let a = self.stop_rate();
+        let period = self.cfg.period_us;
+        if let Some(m) = &mut self.motion {
+            m.stop_at(self.now, a, period);
+        }
+        if self.active == Active::Moving {
+            self.active = Active::Idle;
+        }
         self.plc.clear();
         self.steps.clear();
         if self.signals.get(Signal::Rtap) || self.signals.get(Signal::Rgtap) {
             self.set_signal(Signal::Rtap, false);
             self.plc.rigid_exit(self.now);
         }
-        for s in [Signal::Mf, Signal::Sf, Signal::Tf, Signal::Rgspp, Signal::Rgspm] {
+        // RGSPP / RGSPM fall when a stroke has come to rest (`end_motion`).
+        for s in [Signal::Mf, Signal::Sf, Signal::Tf] {
             self.set_signal(s, false);
         }
-        if let Some(rpm) = self.pre_rigid_rpm.take() {
-            self.spindle.position_mode = false;
-            self.spindle.command(self.now, rpm);
-            self.spindle_changed();
+        if self.motion.is_none() {
+            self.set_signal(Signal::Rgspp, false);
+            self.set_signal(Signal::Rgspm, false);
         }
         self.hold_suppressed = false;
         self.override_locked = false;
         self.overload = None;
         self.css = None;
-        self.interp.reset(self.cmd);
+        // A stroke's spindle turns with the tap until both are at rest; otherwise the spindle
+        // goes back at once.
+        if !self.motion.as_ref().is_some_and(|m| matches!(m.path, Path::Tap { .. })) {
+            self.restore_after_reset();
+        }
+        let stop = self.motion.as_ref().map_or(self.cmd, |m| m.target);
+        self.interp.reset(stop);
         self.set_phase(Phase::Idle);
         self.finish(EndReason::Reset);
+    }
+
+    /// After a reset, once the axes are at rest: the spindle returns to its state before M29
+    /// (GSK-RT-25).
+    pub(super) fn restore_after_reset(&mut self) {
+        if let Some(rpm) = self.pre_rigid_rpm.take() {
+            self.spindle.position_mode = false;
+            self.spindle.command(self.now, rpm);
+            self.spindle_changed();
+        }
     }
 
     /// Starts or stops the overload timer after a change of current or watch.

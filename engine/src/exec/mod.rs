@@ -505,7 +505,17 @@ impl Exec<'_> {
             self.settle();
         }
         if reason == EndReason::Reset {
-            // The spindle is back in its state before M29 once its ramp has ended (GSK-RT-25).
+            // The motion a reset stopped decelerates to rest; then the spindle returns to its
+            // state before M29 (GSK-RT-25), and the run ends once its ramp has ended.
+            if let Some(end) = self.motion.as_ref().map(|m| m.end()) {
+                self.advance_to(end.max(self.now));
+                self.end_motion();
+                self.settle();
+            }
+            if self.pre_rigid_rpm.is_some() {
+                self.restore_after_reset();
+                self.settle();
+            }
             let t = self.spindle.ramp_end().max(self.now);
             self.advance_to(t);
             self.settle();

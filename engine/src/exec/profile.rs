@@ -125,10 +125,40 @@ impl Profile {
         }
         let total = ceil_to(((v0 / a).ceil() as Micros).max(1), period.max(1));
         let a = v0 / total as f64;
-        let dist = (s0 + 0.5 * v0 * total as f64).min(self.dist);
+        if s0 + 0.5 * v0 * total as f64 >= self.dist {
+            // It would stop past the end: the motion's own deceleration to its end is sooner
+            // (it used to run at speed into the end and stop there at once: INV-11, INV-13).
+            return self.rest_from(t);
+        }
+        let dist = s0 + 0.5 * v0 * total as f64;
         let mut pieces = [NO_PIECE; MAX_PIECES];
         pieces[0] = Piece { t0: 0.0, s0, v0, a: -a };
         Profile { pieces, n: 1, dist, total }
+    }
+
+    /// The rest of this profile from `t` µs, as a profile starting at 0 (distances still from
+    /// the original start).
+    fn rest_from(&self, t: Micros) -> Profile {
+        let tf = t as f64;
+        let mut pieces = [NO_PIECE; MAX_PIECES];
+        let mut n = 0;
+        for (k, p) in self.pieces[..self.n].iter().enumerate() {
+            let end = self.pieces[..self.n].get(k + 1).map_or(f64::INFINITY, |q| q.t0);
+            if end <= tf {
+                continue;
+            }
+            pieces[n] = if p.t0 <= tf {
+                let dt = tf - p.t0;
+                Piece { t0: 0.0, s0: p.s0 + p.v0 * dt + 0.5 * p.a * dt * dt, v0: p.v0 + p.a * dt, a: p.a }
+            } else {
+                Piece { t0: p.t0 - tf, ..*p }
+            };
+            n += 1;
+        }
+        if n == 0 {
+            return Profile { dist: self.dist, total: 0, ..Profile::still() }.offset(self.dist);
+        }
+        Profile { pieces, n, dist: self.dist, total: self.total.saturating_sub(t) }
     }
 
     /// A tap braking behind its spindle from `v0` nm/µs: it follows the spindle's deceleration

@@ -307,7 +307,8 @@ impl Exec<'_> {
         }
         let rpm = t.rpm.min(self.cfg.rigid_max_rpm.max(1)) as f64 * t.override_pct.max(1) as f64 / 100.0;
         let lead = t.lead_nm as f64;
-        let v = rpm * lead / 60e6;
+        // No faster than the tap axis may cut: a long lead slows the spindle with it (INV-11).
+        let v = (rpm * lead / 60e6).min(self.cfg.feed_max_nm_min / 60e6);
         // Spindle and tap axis share one time constant at the rigid tapping maximum speed.
         let a_rpm = self.cfg.rigid_max_rpm.max(1) as f64 / self.cfg.rigid_ramp_us.max(1) as f64;
         let a = a_rpm * lead / 60e6;
