@@ -16,6 +16,13 @@ impl Exec<'_> {
         match action {
             PlcAction::Set(sig, v) => {
                 self.set_signal(sig, v);
+                if sig == Signal::Fin && v {
+                    // A function output with a motion: the CNC drops its strobe as it sees FIN.
+                    if let Some(strobe) = self.function_strobe.take() {
+                        self.set_signal(strobe, false);
+                        self.plc.strobe_dropped(self.now);
+                    }
+                }
                 let rtap = self.signals.get(Signal::Rtap);
                 self.plc.react(self.now, sig, v, rtap);
                 self.check_await();
@@ -191,6 +198,7 @@ impl Exec<'_> {
         for s in [Signal::Mf, Signal::Sf, Signal::Tf, Signal::Rgspp, Signal::Rgspm] {
             self.set_signal(s, false);
         }
+        self.function_strobe = None;
         if let Some(rpm) = self.pre_rigid_rpm.take() {
             self.spindle.position_mode = false;
             self.spindle.command(self.now, rpm);
