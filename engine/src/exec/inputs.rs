@@ -16,6 +16,13 @@ impl Exec<'_> {
         match action {
             PlcAction::Set(sig, v) => {
                 self.set_signal(sig, v);
+                if sig == Signal::Fin && v {
+                    // A function output with a motion: the CNC drops its strobe as it sees FIN.
+                    if let Some(strobe) = self.function_strobe.take() {
+                        self.set_signal(strobe, false);
+                        self.plc.strobe_dropped(self.now);
+                    }
+                }
                 let rtap = self.signals.get(Signal::Rtap);
                 let rest = self.spindle_rest();
                 self.plc.react(self.now, sig, v, rtap, rest);
@@ -219,6 +226,7 @@ impl Exec<'_> {
         for s in [Signal::Mf, Signal::Sf, Signal::Tf] {
             self.set_signal(s, false);
         }
+        self.function_strobe = None;
         if self.motion.is_none() {
             self.set_signal(Signal::Rgspp, false);
             self.set_signal(Signal::Rgspm, false);

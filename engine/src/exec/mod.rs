@@ -120,6 +120,8 @@ pub(crate) struct Exec<'a> {
     cur_line: Option<u32>,
     /// Feed hold asked for: stop before the next step.
     hold_requested: bool,
+    /// The strobe of a function output together with a motion, until its FIN comes.
+    function_strobe: Option<Signal>,
     /// The step that started the present motion (re-queued when a hold interrupts it).
     motion_step: Option<Step>,
     /// Serial number of the present `Step::AwaitSignal` wait (its timer checks it).
@@ -207,6 +209,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         dialect: machine.dialect,
         params: machine.params.clone(),
         hold_requested: false,
+        function_strobe: None,
         motion_step: None,
         await_no: 0,
         css: None,

@@ -70,7 +70,9 @@ impl Exec<'_> {
     fn start_step(&mut self, step: Step) {
         let now = self.now;
         // A new strobe waits until the ladder has dropped FIN of the previous one (COM-PLC-01).
-        if matches!(step, Step::Function { .. } | Step::RigidEnter { .. }) && self.signals.get(Signal::Fin) {
+        if matches!(step, Step::Function { .. } | Step::FunctionWithMotion { .. } | Step::RigidEnter { .. })
+            && self.signals.get(Signal::Fin)
+        {
             self.steps.push_front(step);
             self.active = Active::Await { signal: Signal::Fin, value: false, then: AfterAwait::Nothing };
             return;
@@ -92,7 +94,26 @@ impl Exec<'_> {
                 self.start_arc(target, center, plane, clockwise, feed)
             }
             Step::Dwell { us } => self.active = Active::Until(ceil_to(now + us, self.cfg.period_us)),
-            Step::Function { letter, code, effect } => self.start_function(letter, code, effect),
+            Step::Function { letter, code, effect } => {
+                let strobe = self.start_function(letter, code, effect);
+                self.active =
+                    Active::Await { signal: Signal::Fin, value: true, then: AfterAwait::EndStrobe(strobe) };
+                self.check_await();
+            }
+            Step::FunctionWithMotion { letter, code, effect } => {
+                // The motion after it starts now; the strobe drops when FIN comes (KND-LEX-04).
+                self.function_strobe = Some(self.start_function(letter, code, effect));
+            }
+            Step::AwaitFunction => {
+                if let Some(strobe) = self.function_strobe.take() {
+                    self.active = Active::Await {
+                        signal: Signal::Fin,
+                        value: true,
+                        then: AfterAwait::EndStrobe(strobe),
+                    };
+                    self.check_await();
+                }
+            }
             Step::RigidEnter { code, rpm } => {
                 self.emit(Event::Function { letter: 'M', code });
                 // The state before M29 is what the spindle was commanded to do (it may still be ramping).
@@ -203,7 +224,10 @@ impl Exec<'_> {
             Feed::PerMin(f) => f,
             Feed::PerRev(f) => f * self.spindle.at(self.now).1.abs(),
         };
-        if nm_per_min <= 0.0 {
+        // A spindle starting from rest (M03 with the move, KND-LEX-04) is changing speed: the
+        // feed follows it below.
+        let starting = matches!(feed, Feed::PerRev(_)) && self.spindle.ramp(self.now).is_some();
+        if nm_per_min <= 0.0 && !starting {
             self.raise(Alarm::new(AlarmKind::FeedZero, "feed per revolution with the spindle stopped"));
             return None;
         }
@@ -426,7 +450,9 @@ impl Exec<'_> {
         self.cmd = m.target;
     }
 
-    fn start_function(&mut self, letter: char, code: u32, effect: SpindleEffect) {
+    /// Outputs a function (its strobe, its effect on the spindle, the PLC's FIN to come); returns
+    /// its strobe signal.
+    fn start_function(&mut self, letter: char, code: u32, effect: SpindleEffect) -> Signal {
         let now = self.now;
         self.emit(Event::Function { letter, code });
         let strobe = match letter {
@@ -470,8 +496,7 @@ impl Exec<'_> {
             self.cfg.plc.fin_us.max(orient_fin)
         };
         self.plc.strobe(now, fin);
-        self.active = Active::Await { signal: Signal::Fin, value: true, then: AfterAwait::EndStrobe(strobe) };
-        self.check_await();
+        strobe
     }
 }
 

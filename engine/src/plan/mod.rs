@@ -217,6 +217,18 @@ pub enum Step {
         /// What it does to the spindle.
         effect: SpindleEffect,
     },
+    /// An M, S or T function output together with the motion that follows it: strobe and effect
+    /// now, the next step starts at once, the strobe drops when FIN comes (KND-LEX-04).
+    FunctionWithMotion {
+        /// `M`, `S` or `T`.
+        letter: char,
+        /// Its number.
+        code: u32,
+        /// What it does to the spindle.
+        effect: SpindleEffect,
+    },
+    /// Waits until the strobe of the last [`Step::FunctionWithMotion`] has dropped (its FIN came).
+    AwaitFunction,
     /// M29: the rigid tapping handshake (F76.3, position mode, RGTAP, FIN).
     RigidEnter {
         /// The M code to output (29, or the value of Fanuc 5210).

@@ -399,6 +399,7 @@ impl Interpreter for KndInterp {
                     body.push(Step::Rapid { target: mid });
                     body.push(Step::Rapid { target: refp });
                     self.pos = refp;
+                    with_motion(&w, &mut pre, &mut body, &mut post);
                 }
                 _ => {
                     // G50: the present position gets the given program coordinates (KND-LEX-07).
@@ -475,6 +476,9 @@ impl Interpreter for KndInterp {
                     self.pos = target;
                 }
             }
+            if matches!(self.motion, 0 | 10 | 20 | 30) {
+                with_motion(&w, &mut pre, &mut body, &mut post);
+            }
         }
         self.emit(out, [pre, body, post]);
         Ok(())
@@ -538,4 +542,25 @@ fn arc_center(start: Pos, end: Pos, cw: bool, w: &Words, u: &Units) -> Result<[N
 /// accelerating to speed and decelerating at its end ("由于升降速的原因会出现导程不正确部分").
 fn thread_pass(from: Pos, to: Pos, lead: Nm) -> Option<Step> {
     ThreadPass::line(from, to, [Z, X], lead as f64, false).map(Step::Thread)
+}
+
+/// A move (G00..G03, G28) and the M code of its block start together: the M function is output
+/// as the move starts and the block ends when both are done (seed 001 "移动指令和M同在一个程序段中时,
+/// 移动指令和M指令同时开始执行"; KND-LEX-04, DEC-113). M00, M02 and M30 stay after the move: they
+/// stop or end the program once the block's other commands are done.
+fn with_motion(w: &Words, pre: &mut Vec<Step>, body: &mut Vec<Step>, post: &mut Vec<Step>) {
+    let Some(&(code, _)) = w.m.first() else { return };
+    if matches!(code, 0 | 2 | 30) || body.is_empty() {
+        return;
+    }
+    let is_it = |s: &Step| matches!(s, Step::Function { letter: 'M', code: c, .. } if *c == code);
+    let found = pre
+        .iter()
+        .position(is_it)
+        .map(|i| pre.remove(i))
+        .or_else(|| post.iter().position(is_it).map(|i| post.remove(i)));
+    if let Some(Step::Function { letter, code, effect }) = found {
+        body.insert(0, Step::FunctionWithMotion { letter, code, effect });
+        body.push(Step::AwaitFunction);
+    }
 }
