@@ -213,6 +213,27 @@ impl From<&InputError> for Fancy {
     }
 }
 
+/// Text from a file, a program or an adapter made safe to echo on a terminal: control
+/// characters (escape sequences, NUL, a lone CR, bidirectional overrides) are written as
+/// `\u{1b}`, a tab as a space; at most `max` characters are kept, then `…`.
+pub fn printable(s: &str, max: usize) -> String {
+    let mut out = String::with_capacity(s.len().min(max * 2));
+    for (n, c) in s.chars().enumerate() {
+        if n >= max {
+            out.push('…');
+            break;
+        }
+        match c {
+            '\t' => out.push(' '),
+            c if c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}') => {
+                let _ = write!(out, "\\u{{{:x}}}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
 /// A parse error of `text` (the file `name`) as an input error at its span.
 pub fn parse_error(name: &str, text: &str, e: &nc_engine::ParseError) -> InputError {
     let span = Span::from_line_col(text, e.line, e.col, e.len.max(1));
@@ -291,6 +312,13 @@ mod tests {
         let e = InputError::new("missing.nc", "cannot read: No such file");
         assert_eq!(e.render_plain(), "error: missing.nc: cannot read: No such file\n");
         assert!(e.render_fancy(false).contains("missing.nc: cannot read"));
+    }
+
+    #[test]
+    fn printable_escapes_control_characters_and_truncates() {
+        assert_eq!(printable("G0\u{1b}[2J\tX1\0", 100), "G0\\u{1b}[2J X1\\u{0}");
+        assert_eq!(printable("abcdef", 3), "abc…");
+        assert_eq!(printable("a\u{202e}b", 10), "a\\u{202e}b");
     }
 
     #[test]

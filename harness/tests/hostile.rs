@@ -47,7 +47,6 @@ impl Drop for Dir {
 /// How a hostile run ended.
 struct Ended {
     code: i32,
-    #[allow(dead_code)]
     stdout: Vec<u8>,
     stderr: String,
 }
@@ -225,4 +224,77 @@ fn a_program_of_too_many_lines_is_refused_and_the_cap_can_be_raised() {
     );
     // Read and run (it has no M30: the run ends another way than at the program end).
     assert!(!e.stderr.contains("lines allowed"), "{}", e.stderr);
+}
+
+// ---- 1. Runaway runs, and exit 1 says why ---------------------------------------------------
+
+#[test]
+fn words_finer_than_the_least_increment_are_range_alarms() {
+    let d = Dir::new("tiny");
+    let cases = [
+        ("gsk-lathe", "M29 S500\nG88 X-50 F0.000001\nM30\n", "g.nc:2: alarm NC-1001"),
+        ("gsk-lathe", "G98 G01 Z-10 F0.000001\nM30\n", "g.nc:1: alarm NC-1001"),
+        ("knd-lathe", "G98 G01 Z-10 F0.000001\nM30\n", "g.nc:1: alarm NC-1001"),
+        ("knd-lathe", "S500 M03\nG32 Z-10 F0.00001\nM30\n", "g.nc:2: alarm NC-1001"),
+        ("fanuc-mill", "G94 G01 Z-10 F0.000001\nM30\n", "g.nc:1: alarm NC-1001"),
+        ("heidenhain", "BEGIN PGM T MM\nL Z-10 F0.0000001\nEND PGM T MM\n", "g.nc:2: alarm NC-1001"),
+    ];
+    for (dialect, program, says) in cases {
+        d.file("g.nc", program);
+        let e = hostile(&d.0, &["run", "g.nc", "--dialect", dialect, "--out", "t.jsonl"], 1, says);
+        assert_eq!(e.stderr.lines().count(), 1, "{dialect}: {}", e.stderr);
+    }
+}
+
+#[test]
+fn a_run_ending_on_an_alarm_says_which_and_where() {
+    let d = Dir::new("alarm");
+    d.file("a.nc", "G98\nG1 Z-1 F60\nG1 Z-2 F0\nM30\n");
+    let e = hostile(&d.0, &["run", "a.nc", "--dialect", "gsk-lathe", "--out", "t.jsonl"], 1, "");
+    assert_eq!(
+        e.stderr, "a.nc:3: alarm NC-1001: WORD OUT OF RANGE: F0: feed must be > 0 in `G1 Z-2 F0`\n",
+        "one line: the alarm code, its message and the program line"
+    );
+}
+
+#[test]
+fn time_limit_and_output_budget_stop_runaway_runs() {
+    let d = Dir::new("runaway");
+    // A legal but endless feed: 10 mm at 0.001 mm/min takes about 7 days.
+    d.file("slow.nc", "G98 G01 Z-10 F0.001\nM30\n");
+    let e = hostile(
+        &d.0,
+        &["run", "slow.nc", "--dialect", "gsk-lathe", "--time-limit", "2", "--out", "t.jsonl"],
+        1,
+        "slow.nc: the run reached its time limit of 2 s of machine time",
+    );
+    assert_eq!(e.stderr.lines().count(), 1);
+    let trace = std::fs::read_to_string(d.0.join("t.jsonl")).expect("trace");
+    assert!(trace
+        .lines()
+        .last()
+        .is_some_and(|l| l.contains("\"t_us\":2000000,\"kind\":\"end\",\"reason\":\"time_limit\"")));
+
+    let e = hostile(
+        &d.0,
+        &["run", "slow.nc", "--dialect", "gsk-lathe", "--max-output-mib", "1", "--out", "t.jsonl"],
+        1,
+        "slow.nc: the run was stopped when its trace reached 1 MiB (--max-output-mib)",
+    );
+    assert_eq!(e.stderr.lines().count(), 1);
+    let len = std::fs::metadata(d.0.join("t.jsonl")).expect("trace").len();
+    assert!((1 << 20..(1 << 20) + (128 << 10)).contains(&len), "{len} bytes");
+    let trace = std::fs::read_to_string(d.0.join("t.jsonl")).expect("trace");
+    assert!(trace.lines().last().is_some_and(|l| l.contains("\"kind\":\"end\",\"reason\":\"output_limit\"")));
+
+    // A dwell of 27 hours at 1 ms samples runs into the default budget (1 GiB) on stdout:
+    // stopped, not written to the end. Standard output is a pipe read to its end here.
+    d.file("dwell.nc", "G04 P99999999\nM30\n");
+    let e = hostile(
+        &d.0,
+        &["run", "dwell.nc", "--dialect", "gsk-lathe", "--max-output-mib", "8"],
+        1,
+        "dwell.nc: the run was stopped when its trace reached 8 MiB",
+    );
+    assert!(e.stdout.len() < 9 << 20);
 }

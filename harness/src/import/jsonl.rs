@@ -380,11 +380,12 @@ impl JsonlSource {
                     "reset" => EndReason::Reset,
                     "stopped" => EndReason::Stopped,
                     "time_limit" => EndReason::TimeLimit,
+                    "output_limit" => EndReason::OutputLimit,
                     r => {
                         return Err(l.err(
                             "reason",
                             format!("unknown end reason `{r}`"),
-                            "program_end, alarm, reset, stopped or time_limit",
+                            "program_end, alarm, reset, stopped, time_limit or output_limit",
                         ))
                     }
                 };
