@@ -298,3 +298,135 @@ fn time_limit_and_output_budget_stop_runaway_runs() {
     );
     assert!(e.stdout.len() < 9 << 20);
 }
+
+// ---- 2. The adapter runner: misbehaving adapters fail one scenario, the run goes on ----------
+
+/// The repository root (where `scenarios/` is).
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// A Python adapter proxying to `nc-conform serve` that misbehaves as `mode` says during the
+/// first scenario, and notes every `hello` in `hellos`.
+fn misbehaving_adapter(dir: &Path, mode: &str) -> String {
+    let script = r#"
+import json, subprocess, sys, os, time
+mode, marker, nc, hellos = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+serve = subprocess.Popen([nc, "serve"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+first = not os.path.exists(marker)
+def say(obj):
+    sys.stdout.write(json.dumps(obj) + "\n"); sys.stdout.flush()
+for line in sys.stdin:
+    req = json.loads(line)
+    op = req["op"]
+    if op == "hello":
+        open(hellos, "a").write("hello\n")
+    if op == "load" and first:
+        open(marker, "w").close()
+    if first and os.path.exists(marker) and op == "advance":
+        if mode == "close_stdout":
+            sys.stderr.write("closing stdout\n"); sys.stderr.flush()
+            os.close(1); time.sleep(120)
+        if mode == "close_stdin":
+            os.close(0)
+            serve.stdin.write(line); serve.stdin.flush()
+            sys.stdout.write(serve.stdout.readline()); sys.stdout.flush()
+            time.sleep(120)
+        if mode == "long_line":
+            sys.stdout.write("x" * (20 << 20)); sys.stdout.flush(); time.sleep(120)
+        if mode == "no_newline":
+            sys.stdout.write('{"ok": true'); sys.stdout.flush(); time.sleep(120)
+        if mode == "idle":
+            say({"ok": True, "now_us": 0, "ended": False, "stopped_on": None}); continue
+        if mode == "slow":
+            time.sleep(0.4)
+            say({"ok": True, "now_us": 1, "ended": False, "stopped_on": None}); continue
+        if mode == "ok_false":
+            sys.stderr.write("servo \x1b[31mred\x1b[0m alarm\n"); sys.stderr.flush()
+            say({"ok": False, "error": "servo fault \x1b]0;pwned\x07 on Z"}); continue
+    if first and os.path.exists(marker) and op == "read" and mode in ("idle", "slow"):
+        say({"ok": True, "events": []}); continue
+    serve.stdin.write(line); serve.stdin.flush()
+    sys.stdout.write(serve.stdout.readline()); sys.stdout.flush()
+"#;
+    let path = dir.join("adapter.py");
+    std::fs::write(&path, script).expect("write adapter");
+    format!(
+        "python3 {} {mode} {} {BIN} {}",
+        path.display(),
+        dir.join("marker").display(),
+        dir.join("hellos").display()
+    )
+}
+
+/// Runs two scenarios on an adapter misbehaving on the first: the first fails saying `says`,
+/// the second passes on a restarted adapter (two `hello`s), within the memory and time limits.
+fn adapter_fails_one_scenario(mode: &str, extra: &[&str], says: &str) -> Ended {
+    let d = Dir::new(mode);
+    let adapter = misbehaving_adapter(&d.0, mode);
+    let mut args = vec![
+        "conform",
+        "--adapter",
+        &adapter,
+        "--filter",
+        "gsk/feed_hold/during_cutting",
+        "--filter",
+        "gsk/feed_hold/during_dwell",
+    ];
+    args.extend(extra);
+    let e = run_in(&root(), &args, &[]);
+    let out = String::from_utf8_lossy(&e.stdout).into_owned();
+    assert_eq!(e.code, 1, "{mode}: {out}{}", e.stderr);
+    assert!(out.contains("FAIL scenarios/gsk/feed_hold/during_cutting.yaml"), "{mode}: {out}");
+    assert!(out.contains(says), "{mode}: `{says}` missing from {out}");
+    assert!(out.contains("ok   scenarios/gsk/feed_hold/during_dwell.yaml"), "{mode}: the run goes on: {out}");
+    assert!(!out.contains('\u{1b}') && !out.contains('\u{7}'), "{mode}: raw control bytes in {out:?}");
+    let hellos = std::fs::read_to_string(d.0.join("hellos")).unwrap_or_default();
+    assert_eq!(hellos.lines().count(), 2, "{mode}: the adapter is restarted after the failure");
+    e
+}
+
+#[test]
+fn an_adapter_closing_its_stdout_and_staying_alive_is_killed() {
+    adapter_fails_one_scenario("close_stdout", &[], "the adapter closed its pipe but kept running (killed)");
+}
+
+#[test]
+fn an_adapter_closing_its_stdin_and_staying_alive_is_killed() {
+    adapter_fails_one_scenario("close_stdin", &[], "the adapter closed its pipe but kept running (killed)");
+}
+
+#[test]
+fn an_endless_answer_line_is_cut_at_its_cap() {
+    adapter_fails_one_scenario("long_line", &[], "an answer line longer than 16777216 bytes");
+}
+
+#[test]
+fn an_answer_without_its_line_end_times_out() {
+    adapter_fails_one_scenario(
+        "no_newline",
+        &["--timeout-ms", "1500"],
+        "no answer to `advance` within 1500 ms",
+    );
+}
+
+#[test]
+fn advances_without_progress_fail_the_scenario() {
+    adapter_fails_one_scenario("idle", &[], "1000 `advance` answers in a row without progress");
+}
+
+#[test]
+fn a_scenario_has_a_time_limit() {
+    adapter_fails_one_scenario(
+        "slow",
+        &["--scenario-timeout-ms", "1500"],
+        "the scenario took longer than 1500 ms (--scenario-timeout-ms)",
+    );
+}
+
+#[test]
+fn ok_false_restarts_the_adapter_and_control_bytes_are_escaped() {
+    let e = adapter_fails_one_scenario("ok_false", &[], "servo fault \\u{1b}]0;pwned\\u{7} on Z");
+    let out = String::from_utf8_lossy(&e.stdout);
+    assert!(out.contains("servo \\u{1b}[31mred\\u{1b}[0m alarm"), "the stderr tail, escaped: {out}");
+}
