@@ -430,3 +430,134 @@ fn ok_false_restarts_the_adapter_and_control_bytes_are_escaped() {
     let out = String::from_utf8_lossy(&e.stdout);
     assert!(out.contains("servo \\u{1b}[31mred\\u{1b}[0m alarm"), "the stderr tail, escaped: {out}");
 }
+
+// ---- 3. Lesser findings ----------------------------------------------------------------------
+
+#[test]
+fn a_period_outside_the_four_is_refused() {
+    let d = Dir::new("period");
+    d.file("p.nc", "G0 X50 Z0\nM30\n");
+    d.file("p.yaml", "params:\n  nc.period_us: 1500\n");
+    hostile(
+        &d.0,
+        &["run", "p.nc", "--dialect", "gsk-lathe", "--params", "p.yaml"],
+        2,
+        "p.yaml:2:17: parameter nc.period_us (interpolation period) = 1500 is not one of the four periods; expected 1000, 2000, 4000 or 8000 us",
+    );
+}
+
+#[test]
+fn check_says_when_the_trace_is_of_another_dialect() {
+    let d = Dir::new("dialect");
+    d.file("p.nc", "S500 M03\nG0 X50 Z0\nM30\n");
+    let e = run_in(&d.0, &["run", "p.nc", "--dialect", "gsk-lathe", "--out", "gsk.jsonl"], &[]);
+    assert_eq!(e.code, 0, "{}", e.stderr);
+    hostile(
+        &d.0,
+        &["check", "p.nc", "--dialect", "fanuc-mill", "--trace", "gsk.jsonl"],
+        2,
+        "gsk.jsonl: the trace was recorded with dialect gsk-lathe (its meta line), the reference runs fanuc-mill",
+    );
+}
+
+#[test]
+fn empty_traces_and_old_timestamps_are_named_for_what_they_are() {
+    let d = Dir::new("empty");
+    d.file("p.nc", "S500 M03\nG0 X50 Z0\nM30\n");
+    d.file("empty.jsonl", "");
+    d.file("blank.csv", "\n \n");
+    let check = |trace: &str, extra: &[&str], says: &str| {
+        let args = [&["check", "p.nc", "--dialect", "gsk-lathe", "--trace", trace][..], extra].concat();
+        hostile(&d.0, &args, 2, says);
+    };
+    check("empty.jsonl", &[], "empty.jsonl: the file is empty");
+    for f in ["jsonl", "csv", "vcd", "shdr"] {
+        check("empty.jsonl", &["--format", f], "empty.jsonl: the file is empty");
+    }
+    check("blank.csv", &[], "blank.csv: the file holds only blank space");
+    d.file("old.shdr", "1900-01-01T00:00:00.000Z|execution|ACTIVE\n");
+    check("old.shdr", &[], "old.shdr:1:1: bad timestamp `1900-01-01T00:00:00.000Z`; expected YYYY-MM-DDTHH:MM:SS[.ffffff]Z, from 1970 on");
+}
+
+#[test]
+fn yaml_errors_are_said_in_the_projects_words() {
+    let d = Dir::new("yaml");
+    d.file("p.nc", "G0 X50 Z0\nM30\n");
+    let scenario = "title: t\nrules: [GSK-RT-01]\ndialect: gsk-lathe\nprogram: \"M30\"\n";
+    d.file("u64.yaml", format!("{scenario}options:\n  sample_us: -5\n"));
+    d.file("dup.yaml", format!("title: u\n{scenario}"));
+    let many: String = (0..300_000).map(|i| format!("  x{i}: 1\n")).collect();
+    d.file("many.yaml", format!("params:\n{many}"));
+    d.file("tol.yaml", "sync_mm: abc\n");
+    d.file("trace.jsonl", "{}\n");
+    let library = ["invalid u64", "DuplicateKeyPolicy", "budget breached", "invalid floating", "<input>"];
+    for (args, says) in [
+        (&["run", "u64.yaml"][..], "u64.yaml:6:14: invalid scenario: expected a whole number of 0 or more"),
+        (&["run", "dup.yaml"][..], "dup.yaml:2:1: invalid scenario: key `title` given twice"),
+        (
+            &["run", "p.nc", "--dialect", "gsk-lathe", "--params", "many.yaml"][..],
+            "invalid parameter file: the YAML is beyond what the tool reads: too many values",
+        ),
+        (
+            &[
+                "check",
+                "p.nc",
+                "--dialect",
+                "gsk-lathe",
+                "--trace",
+                "trace.jsonl",
+                "--tolerances",
+                "tol.yaml",
+            ][..],
+            "tol.yaml:1:10: bad tolerance file: expected a number",
+        ),
+    ] {
+        let e = hostile(&d.0, args, 2, says);
+        for l in library {
+            assert!(!e.stderr.contains(l), "{args:?}: `{l}` in {}", e.stderr);
+        }
+    }
+}
+
+#[test]
+fn echoed_text_is_made_printable_and_short() {
+    let d = Dir::new("echo");
+    d.file("esc.nc", "G0 X1\n\u{1b}[31mG0\u{1b}]0;pwned\u{7} X1\nM30\n");
+    let e = hostile(
+        &d.0,
+        &["run", "esc.nc", "--dialect", "gsk-lathe"],
+        2,
+        "esc.nc:2:1: unexpected character `\\u{1b}`",
+    );
+    assert!(!e.stderr.contains('\u{1b}') && !e.stderr.contains('\u{7}'), "{:?}", e.stderr);
+    assert!(e.stderr.contains("2 | ␛[31mG0␛]0;pwned␇ X1"), "{}", e.stderr);
+    // A one-line file of 2 MB: the snippet shows a window of it, not the whole line.
+    d.file("wide.nc", format!("G0 X1 {}$\n", "Z1 ".repeat(700_000)));
+    let e = hostile(&d.0, &["run", "wide.nc", "--dialect", "gsk-lathe"], 2, "wide.nc:1:2100007:");
+    assert!(e.stderr.len() < 2000, "{} bytes on stderr", e.stderr.len());
+    // A scenario naming /etc/passwd as its program: what is echoed of it is one short line.
+    if Path::new("/etc/passwd").is_file() {
+        d.file("pw.yaml", "title: t\nrules: [GSK-RT-01]\ndialect: gsk-lathe\nprogram_file: /etc/passwd\n");
+        let e = run_in(&d.0, &["run", "pw.yaml"], &[]);
+        assert_eq!(e.code, 2, "{}", e.stderr);
+        assert!(e.stderr.lines().count() <= 4 && e.stderr.len() < 1000, "{}", e.stderr);
+    }
+}
+
+#[test]
+fn json_lines_with_a_key_given_twice_are_refused() {
+    let d = Dir::new("dupkey");
+    d.file("p.nc", "S500 M03\nG0 X50 Z0\nM30\n");
+    let e = run_in(&d.0, &["run", "p.nc", "--dialect", "gsk-lathe", "--out", "t.jsonl"], &[]);
+    assert_eq!(e.code, 0, "{}", e.stderr);
+    let trace = std::fs::read_to_string(d.0.join("t.jsonl")).expect("trace");
+    let mut lines: Vec<String> = trace.lines().map(str::to_string).collect();
+    lines[1] = lines[1].replacen("\"kind\":", "\"t_us\":5,\"kind\":", 1);
+    d.file("dup.jsonl", lines.join("\n") + "\n");
+    hostile(
+        &d.0,
+        &["check", "p.nc", "--dialect", "gsk-lathe", "--trace", "dup.jsonl"],
+        2,
+        "dup.jsonl:2:16: a key given twice: duplicate key `t_us`",
+    );
+}

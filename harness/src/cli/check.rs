@@ -153,6 +153,23 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         lenient: args.lenient,
     };
     let mut importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
+    // A JSON Lines trace names its dialect: one other than the reference's is a mistake in the
+    // command line, not 25 divergences.
+    if let Some(recorded) = importer.meta().trace.as_ref().map(|m| m.dialect) {
+        if recorded != reference.meta.dialect {
+            let mut e = InputError::new(
+                display_name(&args.trace),
+                format!(
+                    "the trace was recorded with dialect {} (its meta line), the reference runs {}",
+                    crate::diag::printable(recorded, 40),
+                    reference.meta.dialect
+                ),
+            );
+            e.expected =
+                Some(format!("a trace of dialect {} (or --dialect {recorded})", reference.meta.dialect));
+            return Err(e);
+        }
+    }
     let carried = check::Carried::of(importer.meta());
     let mut failure: Option<ImportError> = None;
     let stream = std::iter::from_fn(|| match importer.next()? {

@@ -350,8 +350,12 @@ impl ProcessController {
 
     fn object(&mut self, line: &str, msg: &Value) -> Result<Map<String, Value>, ControllerError> {
         let op = msg.get("op").and_then(Value::as_str).unwrap_or("?");
-        match serde_json::from_str::<Value>(line) {
+        match crate::json_keys::from_str(line) {
             Ok(Value::Object(o)) => Ok(o),
+            Err(e) if crate::json_keys::is_duplicate(&e) => Err(self.fail(
+                ErrorKind::Protocol,
+                format!("the answer to `{op}` gives a key twice: {}", crate::json_keys::message(&e)),
+            )),
             _ => Err(self.fail(
                 ErrorKind::Garbage,
                 format!("answer to `{op}` is not a JSON object: {}", shorten(line)),
