@@ -561,3 +561,26 @@ fn json_lines_with_a_key_given_twice_are_refused() {
         "dup.jsonl:2:16: a key given twice: duplicate key `t_us`",
     );
 }
+
+#[test]
+fn runs_held_in_memory_are_bounded() {
+    let d = Dir::new("memory");
+    d.file("slow.nc", "G98 G01 Z-10 F0.001\nM30\n");
+    d.file("t.jsonl", "{}\n");
+    hostile(
+        &d.0,
+        &["check", "slow.nc", "--dialect", "gsk-lathe", "--trace", "t.jsonl"],
+        2,
+        "slow.nc: the reference run of the program did not end within 1000000 trace events",
+    );
+    d.file(
+        "slow.yaml",
+        "title: t\nrules: [GSK-RT-01]\ndialect: gsk-lathe\nprogram: \"M30\"\noptions:\n  time_limit_ms: 604800000\n  sample_us: 1\n",
+    );
+    hostile(
+        &d.0,
+        &["run", "slow.yaml"],
+        2,
+        "slow.yaml: options: time_limit_ms 604800000 at sample_us 1 would hold",
+    );
+}

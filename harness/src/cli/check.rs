@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use clap::builder::PossibleValuesParser;
 use clap::Args;
-use nc_engine::trace::TraceEvent;
+use nc_engine::trace::{EndReason, TraceEvent, TraceMeta, TraceSink, VecSink};
 use nc_engine::{Machine, RunOptions};
 
 use super::{display_name, parse_error, run_scenario, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
@@ -96,6 +96,27 @@ fn import_error(e: &ImportError) -> InputError {
     ie
 }
 
+/// The most events of a program's reference run held in memory.
+const MAX_REFERENCE_EVENTS: usize = 1_000_000;
+
+/// A sink keeping the whole trace, that stops the run at `cap` events.
+struct Capped {
+    inner: VecSink,
+    cap: usize,
+}
+
+impl TraceSink for Capped {
+    fn start(&mut self, meta: &TraceMeta) {
+        self.inner.start(meta);
+    }
+    fn event(&mut self, ev: &TraceEvent) {
+        self.inner.event(ev);
+    }
+    fn wants_stop(&self) -> bool {
+        self.inner.events.len() >= self.cap
+    }
+}
+
 fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     let input_name = display_name(&args.input);
     // The reference run.
@@ -126,7 +147,22 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
         let text = input::read_text(&args.input, input::PROGRAM)?;
         let program = machine.parse(&text).map_err(|e| parse_error(&input_name, &text, &e))?;
-        let trace = machine.run_to_trace(&program, &RunOptions::default());
+        // Held in memory: at most MAX_REFERENCE_EVENTS events (a slow feed would otherwise fill
+        // the memory with seven days of samples).
+        let mut sink = Capped { inner: VecSink::default(), cap: MAX_REFERENCE_EVENTS };
+        machine.run(&program, &RunOptions::default(), &mut sink);
+        let trace = sink.inner.into_trace();
+        if trace.end().is_some_and(|e| e.reason == EndReason::OutputLimit) {
+            let secs = trace.events.last().map_or(0, |e| e.t_us) as f64 / 1e6;
+            let mut e = InputError::new(
+                &input_name,
+                format!(
+                    "the reference run of the program did not end within {MAX_REFERENCE_EVENTS} trace events ({secs} s of machine time)"
+                ),
+            );
+            e.expected = Some("a program that ends (check compares whole runs)".into());
+            return Err(e);
+        }
         (format!("{input_name} ({dialect}, default inputs)"), trace, None, Vec::new(), None)
     };
     let tolerances = match args.tolerances.as_ref().or(tol_default.as_ref()) {
