@@ -584,3 +584,31 @@ fn runs_held_in_memory_are_bounded() {
         "slow.yaml: options: time_limit_ms 604800000 at sample_us 1 would hold",
     );
 }
+
+// ---- Beyond the list -------------------------------------------------------------------------
+
+#[test]
+fn an_alignment_offset_that_would_overflow_is_refused() {
+    let d = Dir::new("offset");
+    d.file("p.nc", "S500 M03\nG0 X50 Z0\nM30\n");
+    let e = run_in(&d.0, &["run", "p.nc", "--dialect", "gsk-lathe", "--out", "t.jsonl"], &[]);
+    assert_eq!(e.code, 0, "{}", e.stderr);
+    let check = ["check", "p.nc", "--dialect", "gsk-lathe", "--trace", "t.jsonl"];
+    hostile(&d.0, &[&check[..], &["--offset-us", "9223372036854775807"]].concat(), 2, "is not in");
+    hostile(
+        &d.0,
+        &[&check[..], &["--anchor", "offset:-9223372036854775808"]].concat(),
+        2,
+        "--anchor: offset -9223372036854775808 µs is out of range",
+    );
+}
+
+#[test]
+fn serve_reads_its_requests_bounded() {
+    let d = Dir::new("serve");
+    let mut cmd = Command::new("sh");
+    cmd.arg("-c").arg(format!("ulimit -v {MEMORY_KIB}; exec \"$0\" serve < /dev/zero")).arg(BIN);
+    let out = cmd.current_dir(&d.0).output().expect("serve");
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("a request line longer than 16777216 bytes"));
+}

@@ -58,7 +58,8 @@ pub struct CheckArgs {
     pub anchor: Option<String>,
 
     /// An explicit alignment instead of an anchor: reference time = recorded time + N µs.
-    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    #[arg(long, value_name = "N", allow_hyphen_values = true,
+          value_parser = clap::value_parser!(i64).range(-MAX_OFFSET_US..=MAX_OFFSET_US))]
     pub offset_us: Option<i64>,
 
     /// Tolerances (YAML, docs/checking.md); default: `SCENARIO.check.yaml` next to the scenario
@@ -95,6 +96,9 @@ fn import_error(e: &ImportError) -> InputError {
     ie.expected = e.expected.clone();
     ie
 }
+
+/// The largest alignment offset, µs (about 31 years): beyond it times overflow.
+const MAX_OFFSET_US: i64 = 1_000_000_000_000_000;
 
 /// The most events of a program's reference run held in memory.
 const MAX_REFERENCE_EVENTS: usize = 1_000_000;
@@ -178,6 +182,13 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         })?),
         (None, None) => None,
     };
+    if let Some(Anchor::Offset(o)) = anchor {
+        if o.unsigned_abs() > MAX_OFFSET_US.unsigned_abs() {
+            let mut e = InputError::new("--anchor", format!("offset {o} µs is out of range"));
+            e.expected = Some(format!("an offset of at most ±{MAX_OFFSET_US} µs"));
+            return Err(e);
+        }
+    }
     // The recorded stream.
     let map = match &args.map {
         Some(p) => Some(ColumnMap::load(p)?),
