@@ -612,3 +612,20 @@ fn serve_reads_its_requests_bounded() {
     assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(String::from_utf8_lossy(&out.stdout).contains("a request line longer than 16777216 bytes"));
 }
+
+#[test]
+fn a_scenario_directory_with_symbolic_link_loops_is_walked_once() {
+    let d = Dir::new("links");
+    let dir = d.0.join("s");
+    std::fs::create_dir_all(&dir).expect("dir");
+    std::os::unix::fs::symlink(".", dir.join("a")).expect("link");
+    std::os::unix::fs::symlink(".", dir.join("b")).expect("link");
+    let scenario =
+        std::fs::read_to_string(root().join("scenarios/gsk/feed_hold/during_dwell.yaml")).expect("scenario");
+    std::fs::write(dir.join("one.yaml"), scenario).expect("write");
+    let adapter = format!("{BIN} serve");
+    let e = run_in(&d.0, &["conform", "--adapter", &adapter, "--scenarios", "s"], &[]);
+    let out = String::from_utf8_lossy(&e.stdout);
+    assert_eq!(e.code, 0, "{out}{}", e.stderr);
+    assert_eq!(out.lines().filter(|l| l.starts_with("ok ")).count(), 1, "{out}");
+}
