@@ -333,6 +333,23 @@ pub fn yaml_wording(message: &str) -> String {
     out
 }
 
+/// A report of several lines made safe for a terminal: as [`printable`] line by line (line
+/// breaks and tabs kept, nothing cut), for reports that quote what a recorded trace or an
+/// adapter said.
+pub fn printable_lines(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '\n' | '\t' => out.push(c),
+            c if c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}') => {
+                let _ = write!(out, "\\u{{{:x}}}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
 /// A parse error of `text` (the file `name`) as an input error at its span.
 pub fn parse_error(name: &str, text: &str, e: &nc_engine::ParseError) -> InputError {
     let span = Span::from_line_col(text, e.line, e.col, e.len.max(1));

@@ -238,7 +238,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     if warnings > 0 {
         text.push_str(&format!("warning: {warnings} faulty row(s) of {trace_name} left out (--lenient)\n"));
     }
-    print!("{text}");
+    print!("{}", crate::diag::printable_lines(&text));
     let write = |p: &PathBuf, body: String| {
         std::fs::write(p, body).map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))
     };

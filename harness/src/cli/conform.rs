@@ -99,7 +99,7 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
         println!("{tag} {name}");
         report.scenarios.push(v);
     }
-    print!("\n{}", report.summary());
+    print!("\n{}", crate::diag::printable_lines(&report.summary()));
     let write = |p: &PathBuf, body: String| {
         std::fs::write(p, body).map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))
     };
