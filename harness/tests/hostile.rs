@@ -629,3 +629,21 @@ fn a_scenario_directory_with_symbolic_link_loops_is_walked_once() {
     assert_eq!(e.code, 0, "{out}{}", e.stderr);
     assert_eq!(out.lines().filter(|l| l.starts_with("ok ")).count(), 1, "{out}");
 }
+
+#[test]
+fn a_scenario_run_cannot_be_made_to_hold_unbounded_samples() {
+    let d = Dir::new("scenario-samples");
+    d.file("s.yaml", "title: t\nrules: [GSK-RT-01]\ndialect: gsk-lathe\nprogram: \"G4 P5000\\nM30\\n\"\n");
+    hostile(
+        &d.0,
+        &["run", "s.yaml", "--sample-us", "1"],
+        2,
+        "--sample-us: 1 µs samples over the scenario's time limit of 600000 ms",
+    );
+    hostile(
+        &d.0,
+        &["run", "s.yaml", "--time-limit", "5"],
+        2,
+        "--time-limit: a scenario names its own time limit",
+    );
+}
