@@ -153,8 +153,11 @@ pub fn read_utf8(path: &Path, cap: Cap) -> Result<String, InputError> {
 /// Unreadable file, bad YAML, unknown keys (located).
 pub fn load_tolerances(path: &Path) -> Result<Tolerances, InputError> {
     let text = read_utf8(path, YAML)?;
-    serde_saphyr::from_str::<Tolerances>(&text)
-        .map_err(|e| InputError::new(display_name(path), format!("bad tolerance file: {e}")))
+    serde_saphyr::from_str::<Tolerances>(&text).map_err(|e| {
+        let pe = crate::params_yaml::yaml_error(&text, &e);
+        let message = pe.message.replacen("invalid parameter file", "bad tolerance file", 1);
+        InputError::at(display_name(path), &text, pe.span, message, pe.expected)
+    })
 }
 
 #[cfg(test)]

@@ -28,8 +28,11 @@ pub fn program_text(path: &Path, name: &str) -> Result<String, InputError> {
     let text = String::from_utf8(bytes)
         .map_err(|_| InputError::new(name, "cannot read: stream did not contain valid UTF-8"))?;
     let options = serde_saphyr::options! { strict_booleans: true, with_snippet: false };
-    let file: ScenarioFile = serde_saphyr::from_str_with_options(&text, options)
-        .map_err(|e| InputError::new(name, format!("invalid scenario: {e}")))?;
+    let file: ScenarioFile = serde_saphyr::from_str_with_options(&text, options).map_err(|e| {
+        let pe = crate::params_yaml::yaml_error(&text, &e);
+        let message = pe.message.replacen("invalid parameter file", "invalid scenario", 1);
+        InputError::at(name, &text, pe.span, message, pe.expected)
+    })?;
     match (file.program, file.program_file) {
         (Some(p), _) => Ok(p.value),
         (None, Some(f)) => {

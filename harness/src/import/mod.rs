@@ -244,6 +244,14 @@ pub fn from_reader(
             Format::detect(head)
         }
     };
+    // An empty file is said to be empty, whatever its format (not "a CSV trace needs a map").
+    let head = reader.fill_buf().map_err(|e| ctx.err(ErrorKind::Io, 0, 0, format!("cannot read: {e}")))?;
+    if head.iter().all(u8::is_ascii_whitespace) {
+        let what = if head.is_empty() { "the file is empty" } else { "the file holds only blank space" };
+        return Err(ctx
+            .err(ErrorKind::Header, 0, 0, what)
+            .expected("a recorded trace: JSON Lines, CSV, VCD or MTConnect SHDR"));
+    }
     let (meta, src): (RecordedMeta, Box<dyn Source>) = match format {
         Format::Jsonl => jsonl::open(&mut ctx, reader)?,
         Format::Csv => {

@@ -54,6 +54,10 @@ pub fn load(path: &Path, name: &str) -> Result<Scenario, InputError> {
     load_text(&text, name, path.parent().unwrap_or(Path::new(".")))
 }
 
+/// The most samples a scenario's run may write (`options.time_limit_ms` / `options.sample_us`):
+/// its trace is held in memory, about 100 bytes a sample.
+pub const MAX_SAMPLES: u64 = 1_000_000;
+
 /// [`load`] from text; `dir` is where `program_file` paths start.
 ///
 /// # Errors
@@ -107,6 +111,22 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
     for entry in &file.inputs {
         let (trigger, input) = input(&ctx, entry)?;
         inputs.inputs.push(nc_engine::input::ScheduledInput { trigger, input });
+    }
+    // A scenario's trace is held in memory: its samples are bounded (docs/input-limits.md).
+    let samples = match file.options.sample_us {
+        0 => 0,
+        s => file.options.time_limit_ms.saturating_mul(1000) / s,
+    };
+    if samples > MAX_SAMPLES {
+        let mut e = InputError::new(
+            ctx.file,
+            format!(
+                "options: time_limit_ms {} at sample_us {} would hold {samples} samples, more than the {MAX_SAMPLES} a scenario may",
+                file.options.time_limit_ms, file.options.sample_us
+            ),
+        );
+        e.expected = Some("a larger sample_us or a shorter time_limit_ms".into());
+        return Err(e);
     }
     let opts = RunOptions {
         sample_us: file.options.sample_us,
