@@ -647,3 +647,32 @@ fn a_scenario_run_cannot_be_made_to_hold_unbounded_samples() {
         "--time-limit: a scenario names its own time limit",
     );
 }
+
+#[test]
+fn check_keeps_a_bounded_number_of_recorded_events() {
+    let d = Dir::new("edges");
+    d.file("p.nc", "S500 M03\nG0 X50 Z0\nM30\n");
+    let e = run_in(&d.0, &["run", "p.nc", "--dialect", "gsk-lathe", "--out", "t.jsonl"], &[]);
+    assert_eq!(e.code, 0, "{}", e.stderr);
+    let meta = std::fs::read_to_string(d.0.join("t.jsonl"))
+        .expect("trace")
+        .lines()
+        .next()
+        .expect("meta")
+        .to_string();
+    let mut text = meta + "\n";
+    for i in 0..1_000_001u64 {
+        text.push_str(&format!(
+            "{{\"t_us\":{},\"kind\":\"signal\",\"name\":\"MF\",\"value\":{}}}\n",
+            i * 10,
+            i % 2
+        ));
+    }
+    d.file("edges.jsonl", text);
+    hostile(
+        &d.0,
+        &["check", "p.nc", "--dialect", "gsk-lathe", "--trace", "edges.jsonl"],
+        2,
+        "edges.jsonl: more than 1000000 recorded events other than samples",
+    );
+}
