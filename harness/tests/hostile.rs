@@ -117,17 +117,40 @@ fn hostile(dir: &Path, args: &[&str], code: i32, says: &str) -> Ended {
 #[test]
 fn deeply_nested_linuxcnc_expressions_are_refused_as_linuxcnc_does() {
     let d = Dir::new("nesting");
+    // The issue's sizes, through the engine's API on a test thread (2 MiB of stack): refused by
+    // the line length, never followed by recursion.
+    let machine = nc_engine::Machine::new("linuxcnc").expect("linuxcnc");
+    let issue = [
+        format!("G0 X{}1{}\nM2\n", "[".repeat(12_000), "]".repeat(12_000)),
+        format!("G0 X[{}]\nM2\n", vec!["1"; 100_000].join("+")),
+        format!("G0 X{}1{}\nM2\n", "sin[".repeat(20_000), "]".repeat(20_000)),
+        format!("G0 X{}1\nM2\n", "-".repeat(100_000)),
+        format!("G0 X[{}]\nM2\n", vec!["1"; 50_000].join("**")),
+    ];
+    for text in &issue {
+        let e = machine.parse(text).expect_err("refused");
+        assert_eq!((e.line, e.col, e.message.as_str()), (1, 253, "Command too long"));
+    }
+    // Through the command line, under the 64 KiB line cap of program files.
     let cases = [
         ("nest.ngc", format!("G0 X{}1{}\nM2\n", "[".repeat(12_000), "]".repeat(12_000))),
-        ("sum.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 100_000].join("+"))),
-        ("sin.ngc", format!("G0 X{}1{}\nM2\n", "sin[".repeat(20_000), "]".repeat(20_000))),
-        ("neg.ngc", format!("G0 X{}1\nM2\n", "-".repeat(100_000))),
-        ("pow.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 50_000].join("**"))),
+        ("sum.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 30_000].join("+"))),
+        ("sin.ngc", format!("G0 X{}1{}\nM2\n", "sin[".repeat(12_000), "]".repeat(12_000))),
+        ("neg.ngc", format!("G0 X{}1\nM2\n", "-".repeat(60_000))),
+        ("pow.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 20_000].join("**"))),
     ];
     for (name, text) in cases {
         d.file(name, text);
         hostile(&d.0, &["run", name, "--dialect", "linuxcnc"], 2, &format!("{name}:1:253: Command too long"));
     }
+    // Past the cap: refused by the reader, before the parser.
+    d.file("sum100k.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 100_000].join("+")));
+    hostile(
+        &d.0,
+        &["run", "sum100k.ngc", "--dialect", "linuxcnc"],
+        2,
+        "sum100k.ngc: line 1 is 200005 bytes long",
+    );
 }
 
 #[test]
@@ -531,10 +554,18 @@ fn echoed_text_is_made_printable_and_short() {
     );
     assert!(!e.stderr.contains('\u{1b}') && !e.stderr.contains('\u{7}'), "{:?}", e.stderr);
     assert!(e.stderr.contains("2 | ␛[31mG0␛]0;pwned␇ X1"), "{}", e.stderr);
-    // A one-line file of 2 MB: the snippet shows a window of it, not the whole line.
-    d.file("wide.nc", format!("G0 X1 {}$\n", "Z1 ".repeat(700_000)));
-    let e = hostile(&d.0, &["run", "wide.nc", "--dialect", "gsk-lathe"], 2, "wide.nc:1:2100007:");
+    // A line of 60 006 bytes: the snippet shows a window of it, not the whole line.
+    d.file("wide.nc", format!("G0 X1 {}$\n", "Z1 ".repeat(20_000)));
+    let e = hostile(&d.0, &["run", "wide.nc", "--dialect", "gsk-lathe"], 2, "wide.nc:1:60007:");
     assert!(e.stderr.len() < 2000, "{} bytes on stderr", e.stderr.len());
+    // A line of 2 MB is refused before parsing (a 60 MB one took more than 512 MiB to parse).
+    d.file("wider.nc", format!("G0 X1 {}\n", "Z1 ".repeat(700_000)));
+    hostile(
+        &d.0,
+        &["run", "wider.nc", "--dialect", "gsk-lathe"],
+        2,
+        "wider.nc: line 1 is 2100006 bytes long, more than the 65536 bytes allowed for a line of a program",
+    );
     // A scenario naming /etc/passwd as its program: what is echoed of it is one short line.
     if Path::new("/etc/passwd").is_file() {
         d.file("pw.yaml", "title: t\nrules: [GSK-RT-01]\ndialect: gsk-lathe\nprogram_file: /etc/passwd\n");
