@@ -24,6 +24,8 @@ pub struct Cap {
     /// The most lines, with the environment variable that changes it: what a program costs in
     /// memory follows its blocks more than its bytes (about 220 bytes a block).
     pub lines: Option<(u64, &'static str)>,
+    /// The longest line, bytes (a 60 MB line of words took more than 512 MiB to parse).
+    pub line_bytes: Option<usize>,
 }
 
 /// G-code programs (`run PROGRAM`, `check PROGRAM`, a scenario's `program_file`): 64 MiB and
@@ -34,10 +36,14 @@ pub const PROGRAM: Cap = Cap {
     default_mib: 64,
     env: Some("NC_CONFORM_MAX_PROGRAM_MIB"),
     lines: Some((1_000_000, "NC_CONFORM_MAX_PROGRAM_LINES")),
+    line_bytes: Some(MAX_PROGRAM_LINE),
 };
 
+/// The longest program line read, bytes: far beyond any control's block (LinuxCNC's is 252).
+pub const MAX_PROGRAM_LINE: usize = 64 * 1024;
+
 /// YAML files (scenarios, `--params`, `--map`, `--tolerances`): 4 MiB.
-pub const YAML: Cap = Cap { what: "a YAML file", default_mib: 4, env: None, lines: None };
+pub const YAML: Cap = Cap { what: "a YAML file", default_mib: 4, env: None, lines: None, line_bytes: None };
 
 /// A whole number read from the environment variable `var`, else `default`.
 fn env_or(var: &str, default: u64) -> u64 {
@@ -52,6 +58,24 @@ impl Cap {
             None => self.default_mib,
         };
         mib.saturating_mul(1024 * 1024)
+    }
+
+    /// The refusal of a file with a line longer than the cap, if it has one.
+    fn too_long_line(self, bytes: &[u8]) -> Option<String> {
+        let max = self.line_bytes?;
+        let mut start = 0;
+        for (no, end) in memchr::memchr_iter(b'\n', bytes).chain(std::iter::once(bytes.len())).enumerate() {
+            if end - start > max {
+                return Some(format!(
+                    "line {} is {} bytes long, more than the {max} bytes allowed for a line of {}",
+                    no + 1,
+                    end - start,
+                    self.what
+                ));
+            }
+            start = end + 1;
+        }
+        None
     }
 
     /// The refusal of a file of more lines than the cap, if it has more.
@@ -105,7 +129,7 @@ pub fn read_capped(path: &Path, cap: Cap) -> Result<Vec<u8>, String> {
     if bytes.len() as u64 > limit {
         return Err(cap.refusal());
     }
-    if let Some(refusal) = cap.too_many_lines(&bytes) {
+    if let Some(refusal) = cap.too_many_lines(&bytes).or_else(|| cap.too_long_line(&bytes)) {
         return Err(refusal);
     }
     Ok(bytes)
@@ -174,7 +198,12 @@ mod tests {
 
     #[test]
     fn programs_are_capped_in_lines_too() {
-        let cap = Cap { lines: Some((3, "NC_CONFORM_TEST_UNSET_VARIABLE")), ..PROGRAM };
+        let cap = Cap { lines: Some((3, "NC_CONFORM_TEST_UNSET_VARIABLE")), line_bytes: Some(4), ..PROGRAM };
+        assert_eq!(cap.too_long_line(b"G0\nG123\nM30"), None);
+        assert_eq!(
+            cap.too_long_line(b"G0\nG1234\nM30").as_deref(),
+            Some("line 2 is 5 bytes long, more than the 4 bytes allowed for a line of a program")
+        );
         assert_eq!(cap.too_many_lines(b"G0\nG1\nM30\n"), None);
         assert_eq!(cap.too_many_lines(b"G0\nG1\nM30"), None);
         assert_eq!(

@@ -117,17 +117,40 @@ fn hostile(dir: &Path, args: &[&str], code: i32, says: &str) -> Ended {
 #[test]
 fn deeply_nested_linuxcnc_expressions_are_refused_as_linuxcnc_does() {
     let d = Dir::new("nesting");
+    // The issue's sizes, through the engine's API on a test thread (2 MiB of stack): refused by
+    // the line length, never followed by recursion.
+    let machine = nc_engine::Machine::new("linuxcnc").expect("linuxcnc");
+    let issue = [
+        format!("G0 X{}1{}\nM2\n", "[".repeat(12_000), "]".repeat(12_000)),
+        format!("G0 X[{}]\nM2\n", vec!["1"; 100_000].join("+")),
+        format!("G0 X{}1{}\nM2\n", "sin[".repeat(20_000), "]".repeat(20_000)),
+        format!("G0 X{}1\nM2\n", "-".repeat(100_000)),
+        format!("G0 X[{}]\nM2\n", vec!["1"; 50_000].join("**")),
+    ];
+    for text in &issue {
+        let e = machine.parse(text).expect_err("refused");
+        assert_eq!((e.line, e.col, e.message.as_str()), (1, 253, "Command too long"));
+    }
+    // Through the command line, under the 64 KiB line cap of program files.
     let cases = [
         ("nest.ngc", format!("G0 X{}1{}\nM2\n", "[".repeat(12_000), "]".repeat(12_000))),
-        ("sum.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 100_000].join("+"))),
-        ("sin.ngc", format!("G0 X{}1{}\nM2\n", "sin[".repeat(20_000), "]".repeat(20_000))),
-        ("neg.ngc", format!("G0 X{}1\nM2\n", "-".repeat(100_000))),
-        ("pow.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 50_000].join("**"))),
+        ("sum.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 30_000].join("+"))),
+        ("sin.ngc", format!("G0 X{}1{}\nM2\n", "sin[".repeat(12_000), "]".repeat(12_000))),
+        ("neg.ngc", format!("G0 X{}1\nM2\n", "-".repeat(60_000))),
+        ("pow.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 20_000].join("**"))),
     ];
     for (name, text) in cases {
         d.file(name, text);
         hostile(&d.0, &["run", name, "--dialect", "linuxcnc"], 2, &format!("{name}:1:253: Command too long"));
     }
+    // Past the cap: refused by the reader, before the parser.
+    d.file("sum100k.ngc", format!("G0 X[{}]\nM2\n", vec!["1"; 100_000].join("+")));
+    hostile(
+        &d.0,
+        &["run", "sum100k.ngc", "--dialect", "linuxcnc"],
+        2,
+        "sum100k.ngc: line 1 is 200005 bytes long",
+    );
 }
 
 #[test]
@@ -531,10 +554,18 @@ fn echoed_text_is_made_printable_and_short() {
     );
     assert!(!e.stderr.contains('\u{1b}') && !e.stderr.contains('\u{7}'), "{:?}", e.stderr);
     assert!(e.stderr.contains("2 | ␛[31mG0␛]0;pwned␇ X1"), "{}", e.stderr);
-    // A one-line file of 2 MB: the snippet shows a window of it, not the whole line.
-    d.file("wide.nc", format!("G0 X1 {}$\n", "Z1 ".repeat(700_000)));
-    let e = hostile(&d.0, &["run", "wide.nc", "--dialect", "gsk-lathe"], 2, "wide.nc:1:2100007:");
+    // A line of 60 006 bytes: the snippet shows a window of it, not the whole line.
+    d.file("wide.nc", format!("G0 X1 {}$\n", "Z1 ".repeat(20_000)));
+    let e = hostile(&d.0, &["run", "wide.nc", "--dialect", "gsk-lathe"], 2, "wide.nc:1:60007:");
     assert!(e.stderr.len() < 2000, "{} bytes on stderr", e.stderr.len());
+    // A line of 2 MB is refused before parsing (a 60 MB one took more than 512 MiB to parse).
+    d.file("wider.nc", format!("G0 X1 {}\n", "Z1 ".repeat(700_000)));
+    hostile(
+        &d.0,
+        &["run", "wider.nc", "--dialect", "gsk-lathe"],
+        2,
+        "wider.nc: line 1 is 2100006 bytes long, more than the 65536 bytes allowed for a line of a program",
+    );
     // A scenario naming /etc/passwd as its program: what is echoed of it is one short line.
     if Path::new("/etc/passwd").is_file() {
         d.file("pw.yaml", "title: t\nrules: [GSK-RT-01]\ndialect: gsk-lathe\nprogram_file: /etc/passwd\n");
@@ -620,6 +651,8 @@ fn a_scenario_directory_with_symbolic_link_loops_is_walked_once() {
     std::fs::create_dir_all(&dir).expect("dir");
     std::os::unix::fs::symlink(".", dir.join("a")).expect("link");
     std::os::unix::fs::symlink(".", dir.join("b")).expect("link");
+    // A named pipe called like a scenario is no scenario file (opening it would wait forever).
+    let fifo = Command::new("mkfifo").arg(dir.join("pipe.yaml")).status().is_ok_and(|s| s.success());
     let scenario =
         std::fs::read_to_string(root().join("scenarios/gsk/feed_hold/during_dwell.yaml")).expect("scenario");
     std::fs::write(dir.join("one.yaml"), scenario).expect("write");
@@ -628,6 +661,7 @@ fn a_scenario_directory_with_symbolic_link_loops_is_walked_once() {
     let out = String::from_utf8_lossy(&e.stdout);
     assert_eq!(e.code, 0, "{out}{}", e.stderr);
     assert_eq!(out.lines().filter(|l| l.starts_with("ok ")).count(), 1, "{out}");
+    assert!(!fifo || !out.contains("pipe.yaml"), "{out}");
 }
 
 #[test]
@@ -645,5 +679,34 @@ fn a_scenario_run_cannot_be_made_to_hold_unbounded_samples() {
         &["run", "s.yaml", "--time-limit", "5"],
         2,
         "--time-limit: a scenario names its own time limit",
+    );
+}
+
+#[test]
+fn check_keeps_a_bounded_number_of_recorded_events() {
+    let d = Dir::new("edges");
+    d.file("p.nc", "S500 M03\nG0 X50 Z0\nM30\n");
+    let e = run_in(&d.0, &["run", "p.nc", "--dialect", "gsk-lathe", "--out", "t.jsonl"], &[]);
+    assert_eq!(e.code, 0, "{}", e.stderr);
+    let meta = std::fs::read_to_string(d.0.join("t.jsonl"))
+        .expect("trace")
+        .lines()
+        .next()
+        .expect("meta")
+        .to_string();
+    let mut text = meta + "\n";
+    for i in 0..1_000_001u64 {
+        text.push_str(&format!(
+            "{{\"t_us\":{},\"kind\":\"signal\",\"name\":\"MF\",\"value\":{}}}\n",
+            i * 10,
+            i % 2
+        ));
+    }
+    d.file("edges.jsonl", text);
+    hostile(
+        &d.0,
+        &["check", "p.nc", "--dialect", "gsk-lathe", "--trace", "edges.jsonl"],
+        2,
+        "edges.jsonl: more than 1000000 recorded events other than samples",
     );
 }

@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use clap::builder::PossibleValuesParser;
 use clap::Args;
-use nc_engine::trace::{EndReason, TraceEvent, TraceMeta, TraceSink, VecSink};
+use nc_engine::trace::{EndReason, Event, TraceEvent, TraceMeta, TraceSink, VecSink};
 use nc_engine::{Machine, RunOptions};
 
 use super::{display_name, parse_error, run_scenario, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
@@ -99,6 +99,9 @@ fn import_error(e: &ImportError) -> InputError {
 
 /// The largest alignment offset, µs (about 31 years): beyond it times overflow.
 const MAX_OFFSET_US: i64 = 1_000_000_000_000_000;
+
+/// The most recorded events other than samples a comparison keeps.
+const MAX_RECORDED_EVENTS: usize = 1_000_000;
 
 /// The most events of a program's reference run held in memory.
 const MAX_REFERENCE_EVENTS: usize = 1_000_000;
@@ -219,8 +222,30 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     }
     let carried = check::Carried::of(importer.meta());
     let mut failure: Option<ImportError> = None;
+    // The comparison keeps the recorded events other than samples: at most
+    // MAX_RECORDED_EVENTS of them (docs/input-limits.md).
+    let mut discrete = 0usize;
+    let trace_name = display_name(&args.trace);
     let stream = std::iter::from_fn(|| match importer.next()? {
-        Ok(ev) => Some(ev),
+        Ok(ev) => {
+            if !matches!(ev.event, Event::Sample(_)) {
+                discrete += 1;
+                if discrete > MAX_RECORDED_EVENTS {
+                    failure = Some(ImportError::new(
+                        import::ErrorKind::Io,
+                        &trace_name,
+                        0,
+                        0,
+                        format!(
+                            "more than {MAX_RECORDED_EVENTS} recorded events other than samples (at {} s), more than check holds",
+                            ev.t_us as f64 / 1e6
+                        ),
+                    ));
+                    return None;
+                }
+            }
+            Some(ev)
+        }
         Err(e) => {
             failure = Some(e);
             None

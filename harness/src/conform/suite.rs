@@ -36,7 +36,7 @@ fn collect(dir: &Path, out: &mut Vec<PathBuf>, seen: &mut std::collections::Hash
     for p in entries {
         if p.is_dir() {
             collect(&p, out, seen);
-        } else if p.extension().is_some_and(|e| e == "yaml" || e == "yml") {
+        } else if p.is_file() && p.extension().is_some_and(|e| e == "yaml" || e == "yml") {
             out.push(p);
         }
     }
