@@ -47,7 +47,7 @@ impl Exec<'_> {
                 let ramp = self.spindle.ramp(now).unwrap_or(Ramp { rpm0: rpm, slope: 0.0, dur: 0.0 });
                 profiles[f.axis] = match Profile::following_through(dist, lead / 60e6, ramp, vmax, a) {
                     Some((p, v_end)) => {
-                        self.follow_v = Some(v_end);
+                        self.follow_v = Some((v_end, self.machine_lock));
                         p
                     }
                     None => Profile::trapezoid(dist, v, a, period),
@@ -66,8 +66,16 @@ impl Exec<'_> {
                 // speed the cut reached the end point with (locked: lead × speed). Where the brake
                 // would carry it past the allowance it leaves the spindle just in time to stop
                 // there, and the spindle brakes on (KND-G93-05).
-                let total = brake_us.max(1);
-                let v0 = self.follow_v.take().unwrap_or(rpm.abs() * lead / 60e6);
+                // Never faster than the spindle can slow down: its ramp, or its brake (a spindle
+                // turning above S under an override takes longer than the brake time for S).
+                let max_rpm = self.cfg.spindle_max_rpm.max(1) as f64;
+                let mut a_limit = max_rpm / self.cfg.spindle_ramp_us.max(1) as f64;
+                if self.cfg.spindle_brake_us > 0 {
+                    a_limit = a_limit.max(max_rpm / self.cfg.spindle_brake_us as f64);
+                }
+                let total = brake_us.max(1).max((rpm.abs() / a_limit).floor() as Micros);
+                let (v0, cut_locked) =
+                    self.follow_v.take().unwrap_or((rpm.abs() * lead / 60e6, self.machine_lock));
                 let a_spindle = rpm.abs() * lead / 60e6 / total as f64;
                 let a_axis = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
                 let room = d.unsigned_abs() as f64;
@@ -85,6 +93,12 @@ impl Exec<'_> {
                 let mut profiles = [Profile::still(); AXES];
                 profiles[f.axis] = profile;
                 self.start_motion(target, Path::Rapid { profiles, backlash: [0.0; AXES] });
+                if let Some(m) = &mut self.motion {
+                    // The brake carries on the cut without a stop: a machine lock switched during
+                    // the cut acts from the next motion that starts from rest (COM-INP-10).
+                    m.locked = cut_locked;
+                    m.lock_spindle = cut_locked;
+                }
                 self.following = f.encoder_bound && self.motion.is_some();
                 if over {
                     let a = Alarm::new(
