@@ -1,10 +1,12 @@
 //! Tapping with the tap axis following the spindle's encoder, the spindle in speed mode (KND
-//! G93, seed 001; LinuxCNC G33.1): cut at lead × the spindle's speed; at the end point the spindle
-//! brakes (KND) or reverses (LinuxCNC) and the tap follows it (overshoot = lead × revolutions
-//! turned meanwhile, within an allowance); on KND once the drive reports zero speed the spindle
-//! turns the other way and the tap returns behind it to the start point, where both stop; the
-//! spindle then resumes its earlier direction. Rules KND-G93-* in `docs/rules/knd-lathe.md`,
-//! LCNC-G331-* in `docs/rules/linuxcnc.md`.
+//! G93, seed 001; LinuxCNC G33.1): cut at lead × the spindle's speed (LinuxCNC: from its next
+//! index pulse), reaching the end point still locked to it; there the spindle brakes (KND) or
+//! reverses (LinuxCNC) and the tap follows it (overshoot = lead × revolutions turned meanwhile,
+//! within an allowance); on KND once the drive reports zero speed the spindle turns the other way
+//! and the tap returns behind it to the start point, where both stop; LinuxCNC follows the
+//! reversed spindle out through the start, brakes with it past the start and moves back
+//! unsynchronised (DEC-87). The spindle then resumes its earlier direction. Rules KND-G93-* in
+//! `docs/rules/knd-lathe.md`, LCNC-G331-* in `docs/rules/linuxcnc.md`.
 //!
 //! The dialect positions to the start point; this builder takes over there and ends there.
 
