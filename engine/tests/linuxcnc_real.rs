@@ -31,30 +31,42 @@ fn sim_machine() -> Machine {
     m
 }
 
-fn recorded_bottom_mm() -> f64 {
+/// The lowest Z and the highest Z after it (the overshoot past the start on the way out), mm.
+fn bottom_and_top(zs: &[f64]) -> (f64, f64) {
+    let k = (0..zs.len()).min_by(|&a, &b| zs[a].total_cmp(&zs[b])).unwrap();
+    (zs[k], zs[k..].iter().copied().fold(f64::NEG_INFINITY, f64::max))
+}
+
+fn recorded_z() -> Vec<f64> {
     include_str!("data/lcnc_g331.csv")
         .lines()
         .skip(1)
-        .filter_map(|l| l.split(',').nth(1)?.parse::<f64>().ok())
-        .fold(f64::INFINITY, f64::min)
+        .filter_map(|l| l.split(',').nth(1)?.parse().ok())
+        .collect()
 }
 
 #[test]
 fn g33_1_bottoms_where_linuxcnc_does_and_keeps_physics() {
-    let recorded = recorded_bottom_mm();
+    let (recorded, recorded_top) = bottom_and_top(&recorded_z());
     assert!((recorded + 10.597).abs() < 0.0005, "the recording bottoms at {recorded}");
+    assert!((recorded_top - 5.603).abs() < 0.0005, "the recording tops at {recorded_top}");
     let m = sim_machine();
     let trace = m.run_to_trace(&m.parse(PROGRAM).unwrap(), &RunOptions::default());
-    let bottom = trace
+    let zs: Vec<f64> = trace
         .events
         .iter()
         .filter_map(|e| match &e.event {
             Event::Sample(s) => Some(s.axes[2] as f64 / 1e6),
             _ => None,
         })
-        .fold(f64::INFINITY, f64::min);
+        .collect();
+    let (bottom, top) = bottom_and_top(&zs);
     // Locked to the spindle: 600 rpm x 1 mm braking at 5000 rpm/s turns 0.6 rev past Z-10; the
     // real controller trails its spindle by 3 µm more at the bottom (README item 7).
     assert!((bottom - recorded).abs() < 0.01, "bottom {bottom} mm, LinuxCNC {recorded} mm");
+    // On the way out it follows the reversed spindle through the start and brakes with it past
+    // the start (README item 5: up to Z5.603), then moves back to Z5 unsynchronised.
+    assert!((top - recorded_top).abs() < 0.01, "top {top} mm, LinuxCNC {recorded_top} mm");
+    assert_eq!(zs.last().copied(), Some(5.0));
     assert_eq!(check(&trace, &Limits::of(&m), None), vec![]);
 }

@@ -43,7 +43,9 @@ fn a_passing_scenario_prints_its_verdicts_and_exits_0() {
     let out = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{out}");
     assert!(out.contains("ok   GSK-RT-07"), "{out}");
-    assert!(out.contains("3 passed, 0 failed"), "{out}");
+    // Three expectations and the physics invariants INV-11..INV-13 that every scenario keeps.
+    assert!(out.contains("ok   INV-11 invariant axis_limits"), "{out}");
+    assert!(out.contains("6 passed, 0 failed"), "{out}");
 }
 
 #[test]

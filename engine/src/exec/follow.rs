@@ -29,33 +29,47 @@ impl Exec<'_> {
                     self.raise(Alarm::new(f.alarm, "the spindle is not turning when the cycle starts"));
                     return;
                 }
+                if f.index {
+                    // Wait for the spindle's next index pulse (angle 0 in its direction of
+                    // rotation); the cut starts on the tick after it.
+                    let next =
+                        if rpm > 0.0 { (angle / 360.0).ceil() } else { (angle / 360.0).floor() } * 360.0;
+                    let dt = ((next - angle).abs() / (rpm.abs() * super::spindle::DEG_PER_US_PER_RPM)).ceil();
+                    if dt > 0.0 {
+                        let at = ceil_to(now + dt as Micros, period.max(1));
+                        self.steps.push_front(Step::Follow(Follow { index: false, ..f }));
+                        self.active = Active::Until(at);
+                        return;
+                    }
+                }
                 let b = self.follow_backlash(&f, d);
-                if d == 0 && b == 0.0 {
+                self.follow_on(&f, d, b, rpm, target);
+            }
+            FollowKind::Through { rpm: r, forward } => {
+                // The spindle is commanded the other way at S × the spindle override (COM-MOT-06)
+                // and ramps there; the tap follows it, locked, through the start.
+                let r = (r as f64 * self.spindle_override as f64 / 100.0)
+                    .min(self.cfg.spindle_max_rpm as f64)
+                    .max(1.0);
+                self.spindle.command(now, if forward { r } else { -r });
+                self.stall_angle = None;
+                self.spindle_changed();
+                let b = self.follow_backlash(&f, d);
+                self.follow_on(&f, d, b, rpm, target);
+            }
+            FollowKind::Unsynced => {
+                if d == 0 {
                     return;
                 }
-                // The axis catches up with lead × the spindle's speed within the cutting
-                // acceleration, then stays locked to it and reaches the end point still at that
-                // speed: the brake that follows carries it on with the spindle (no stop at Z while
-                // the spindle turns). A single-axis profile with its backlash first (the spindle
-                // keeps its own state); a spindle still ramping is followed through its ramp.
-                let vmax = self.cfg.feed_max_nm_min / 60e6;
-                let v = (rpm.abs() * lead / 60e6).min(vmax);
-                let a = vmax / self.cfg.feed_ramp_us.max(1) as f64;
+                let b = self.follow_backlash(&f, d);
+                let v = self.cfg.rapid_nm_min[f.axis] / 60e6;
+                let a = v / self.cfg.rapid_ramp_us[f.axis].max(1) as f64;
                 let mut profiles = [Profile::still(); AXES];
                 let mut backlash = [0.0; AXES];
-                let dist = d.unsigned_abs() as f64 + b;
-                let ramp = self.spindle.ramp(now).unwrap_or(Ramp { rpm0: rpm, slope: 0.0, dur: 0.0 });
-                profiles[f.axis] = match Profile::following_through(dist, lead / 60e6, ramp, vmax, a) {
-                    Some((p, v_end)) => {
-                        self.follow_v = Some(v_end);
-                        p
-                    }
-                    None => Profile::trapezoid(dist, v, a, period),
-                };
+                profiles[f.axis] = Profile::trapezoid(d.unsigned_abs() as f64 + b, v, a, period);
                 backlash[f.axis] = b;
                 target[f.axis] = f.target;
                 self.start_motion(target, Path::Rapid { profiles, backlash });
-                self.following = f.encoder_bound && self.motion.is_some();
             }
             FollowKind::Brake { brake_us } => {
                 if rpm == 0.0 {
@@ -66,8 +80,16 @@ impl Exec<'_> {
                 // speed the cut reached the end point with (locked: lead × speed). Where the brake
                 // would carry it past the allowance it leaves the spindle just in time to stop
                 // there, and the spindle brakes on (KND-G93-05).
-                let total = brake_us.max(1);
-                let v0 = self.follow_v.take().unwrap_or(rpm.abs() * lead / 60e6);
+                // Never faster than the spindle can slow down: its ramp, or its brake (a spindle
+                // turning above S under an override takes longer than the brake time for S).
+                let max_rpm = self.cfg.spindle_max_rpm.max(1) as f64;
+                let mut a_limit = max_rpm / self.cfg.spindle_ramp_us.max(1) as f64;
+                if self.cfg.spindle_brake_us > 0 {
+                    a_limit = a_limit.max(max_rpm / self.cfg.spindle_brake_us as f64);
+                }
+                let total = brake_us.max(1).max((rpm.abs() / a_limit).floor() as Micros);
+                let (v0, cut_locked) =
+                    self.follow_v.take().unwrap_or((rpm.abs() * lead / 60e6, self.machine_lock));
                 let a_spindle = rpm.abs() * lead / 60e6 / total as f64;
                 let a_axis = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
                 let room = d.unsigned_abs() as f64;
@@ -85,6 +107,12 @@ impl Exec<'_> {
                 let mut profiles = [Profile::still(); AXES];
                 profiles[f.axis] = profile;
                 self.start_motion(target, Path::Rapid { profiles, backlash: [0.0; AXES] });
+                if let Some(m) = &mut self.motion {
+                    // The brake carries on the cut without a stop: a machine lock switched during
+                    // the cut acts from the next motion that starts from rest (COM-INP-10).
+                    m.locked = cut_locked;
+                    m.lock_spindle = cut_locked;
+                }
                 self.following = f.encoder_bound && self.motion.is_some();
                 if over {
                     let a = Alarm::new(
@@ -126,6 +154,37 @@ impl Exec<'_> {
                 self.following = f.encoder_bound && self.motion.is_some();
             }
         }
+    }
+
+    /// The axis catches up with lead × the spindle's speed within the cutting acceleration, then
+    /// stays locked to it and reaches the target still at that speed: the brake that follows
+    /// carries it on with the spindle (no stop at Z while the spindle turns). A single-axis
+    /// profile with its backlash `b` first (the spindle keeps its own state); a spindle still
+    /// ramping is followed through its ramp.
+    fn follow_on(&mut self, f: &Follow, d: Nm, b: f64, rpm: f64, mut target: crate::plan::Pos) {
+        if d == 0 && b == 0.0 {
+            return;
+        }
+        let lead = f.lead_nm.max(1) as f64;
+        let period = self.cfg.period_us;
+        let vmax = self.cfg.feed_max_nm_min / 60e6;
+        let v = (rpm.abs() * lead / 60e6).min(vmax);
+        let a = vmax / self.cfg.feed_ramp_us.max(1) as f64;
+        let mut profiles = [Profile::still(); AXES];
+        let mut backlash = [0.0; AXES];
+        let dist = d.unsigned_abs() as f64 + b;
+        let ramp = self.spindle.ramp(self.now).unwrap_or(Ramp { rpm0: rpm, slope: 0.0, dur: 0.0 });
+        profiles[f.axis] = match Profile::following_through(dist, lead / 60e6, ramp, vmax, a) {
+            Some((p, v_end)) => {
+                self.follow_v = Some((v_end, self.machine_lock));
+                p
+            }
+            None => Profile::trapezoid(dist, v, a, period),
+        };
+        backlash[f.axis] = b;
+        target[f.axis] = f.target;
+        self.start_motion(target, Path::Rapid { profiles, backlash });
+        self.following = f.encoder_bound && self.motion.is_some();
     }
 
     /// The spindle stalled while the axis follows its encoder: the axis stops with it at once and

@@ -166,9 +166,20 @@ impl Exec<'_> {
     /// other motion at the cutting feed's.
     fn stop_rate(&self) -> f64 {
         match self.motion.as_ref().map(|m| &m.path) {
-            Some(Path::Rapid { .. }) => (0..crate::trace::AXES)
-                .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
-                .fold(f64::INFINITY, f64::min),
+            // The lowest rate / time constant of the axes that move (an axis without a rapid rate,
+            // standing still, used to make it 0: a stop at once; found by the campaign, INV-11).
+            Some(Path::Rapid { profiles, .. }) => {
+                let a = (0..crate::trace::AXES)
+                    .filter(|&i| profiles[i].dist > 0.0)
+                    .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
+                    .filter(|a| *a > 0.0)
+                    .fold(f64::INFINITY, f64::min);
+                if a.is_finite() {
+                    a
+                } else {
+                    self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64
+                }
+            }
             // A rigid tapping stroke on its profile; a tap following a spindle in speed mode
             // (G93, G33.1 return) at the spindle's ramp, within the axis' own acceleration.
             Some(Path::Tap { lead, .. }) if self.spindle.position_mode => {

@@ -133,8 +133,9 @@ pub(crate) struct Exec<'a> {
     /// A braking coast cut short at the allowance (NC-1050): when it ends (µs), the spindle's
     /// speed then (signed rpm) and its braking deceleration (rpm/µs).
     coast: Option<(Micros, f64, f64)>,
-    /// The speed (nm/µs) a following cut reached its end point with, for the brake after it.
-    follow_v: Option<f64>,
+    /// The speed (nm/µs) a following cut reached its end point with, and whether it ran under
+    /// machine lock, for the brake after it.
+    follow_v: Option<(f64, bool)>,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.

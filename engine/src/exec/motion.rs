@@ -200,7 +200,11 @@ impl Motion {
             // A thread is locked to the spindle: it cannot run on along a braking profile; the
             // axes stop where they are (a thread retract pulls out from there).
             let here = self.pos_unclamped(t);
-            self.start = here;
+            // Under machine lock the machine stayed at the start: keep it there (the lock offset
+            // takes the travel at the end; found by the physics census, INV-07).
+            if !self.locked {
+                self.start = here;
+            }
             self.target = here;
             self.path_end = here;
             self.t0 = t;

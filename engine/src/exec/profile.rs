@@ -125,15 +125,23 @@ impl Profile {
         }
         let total = ceil_to(((v0 / a).ceil() as Micros).max(1), period.max(1));
         let a = v0 / total as f64;
-        if s0 + 0.5 * v0 * total as f64 >= self.dist {
+        if s0 + 0.5 * v0 * total as f64 >= self.dist && self.end_speed() < 1e-9 {
             // It would stop past the end: the motion's own deceleration to its end is sooner
             // (it used to run at speed into the end and stop there at once: INV-11, INV-13).
             return self.rest_from(t);
         }
+        // (A motion that ends at speed, a tap following its spindle through its end point, stops
+        // past its end.)
         let dist = s0 + 0.5 * v0 * total as f64;
         let mut pieces = [NO_PIECE; MAX_PIECES];
         pieces[0] = Piece { t0: 0.0, s0, v0, a: -a };
         Profile { pieces, n: 1, dist, total }
+    }
+
+    /// The speed at the very end of the profile, nm/µs (0 unless it ends at speed).
+    fn end_speed(&self) -> f64 {
+        let p = &self.pieces[self.n.max(1) - 1];
+        (p.v0 + p.a * (self.total as f64 - p.t0)).max(0.0)
     }
 
     /// The rest of this profile from `t` µs, as a profile starting at 0 (distances still from

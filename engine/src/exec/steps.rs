@@ -77,6 +77,17 @@ impl Exec<'_> {
             self.active = Active::Await { signal: Signal::Fin, value: false, then: AfterAwait::Nothing };
             return;
         }
+        // A feed at 0 % feed override does not start: the axes stand still until an input may
+        // have raised the override (it used to take no time and jump to its end: INV-11).
+        if matches!(step, Step::Feed { .. } | Step::Arc { .. })
+            && self.feed_override == 0
+            && !(self.hold_suppressed || self.override_locked)
+        {
+            self.steps.push_front(step);
+            let next = self.inputs.get(self.next_input).map_or(Micros::MAX, |(t, _)| (*t).max(now));
+            self.active = Active::Until(next);
+            return;
+        }
         match step {
             Step::Phase(p) => self.set_phase(p),
             Step::Rapid { target } => {

@@ -332,3 +332,133 @@ pub fn check(trace: &Trace, lim: &Limits, tap: Option<TapSpec>) -> Vec<Violation
 fn axis_name(trace: &Trace, i: usize) -> String {
     trace.meta.axes.iter().find(|a| a.index == i).map_or_else(|| format!("#{i}"), |a| a.letter.to_string())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::trace::{AxisSpec, EndReason, EndSummary, Signals, TraceEvent, TraceMeta};
+
+    /// Limits of a small machine: 6 m/min and 1 m/s² on Z, 3000 rpm with a 1 s ramp, 1 ms period.
+    fn lim() -> Limits {
+        let mut axis_speed = [0.0; AXES];
+        let mut axis_accel = [0.0; AXES];
+        axis_speed[2] = 6e9 / 60e6;
+        axis_accel[2] = 1e-3;
+        Limits {
+            period_us: 1000,
+            axis_speed,
+            axis_accel,
+            backlash_nm: [0; AXES],
+            spindle_max_rpm: 3000.0,
+            spindle_accel: 3000.0 / 1e6,
+            rigid_accel: 3000.0 / 1e6,
+            spindle_brake: 0.0,
+        }
+    }
+
+    /// A trace of samples every ms: Z (nm) and spindle (rpm, mdeg) given per sample.
+    fn trace(samples: &[(Nm, f64, f64)], inputs: &[(usize, &str)]) -> Trace {
+        static AXES_Z: [AxisSpec; 1] = [AxisSpec { letter: 'Z', index: 2, diameter: false, rotary: false }];
+        let mut events = Vec::new();
+        for (k, &(z, rpm, deg)) in samples.iter().enumerate() {
+            for (at, name) in inputs {
+                if *at == k {
+                    let ev = Event::Input { name: name.to_string(), value: "on".into() };
+                    events.push(TraceEvent { t_us: k as Micros * 1000, event: ev });
+                }
+            }
+            let mut axes = [0; AXES];
+            axes[2] = z;
+            let s = Sample {
+                axes,
+                spindle_mrpm: (rpm * 1000.0).round() as i64,
+                spindle_mdeg: ((deg * 1000.0).round() as i64).rem_euclid(360_000),
+            };
+            events.push(TraceEvent { t_us: k as Micros * 1000, event: Event::Sample(s) });
+        }
+        let end = EndSummary {
+            reason: EndReason::ProgramEnd,
+            state: Sample::default(),
+            command: [0; AXES],
+            signals: Signals::default(),
+            modal: Vec::new(),
+            alarms: 0,
+            blocks: 0,
+        };
+        events.push(TraceEvent { t_us: samples.len() as Micros * 1000, event: Event::End(end) });
+        Trace {
+            meta: TraceMeta { dialect: "", axes: AXES_Z.to_vec(), period_us: 1000, sample_us: 1000 },
+            events,
+        }
+    }
+
+    /// Z accelerating at `a` nm/µs² from rest for `n` ms, spindle still.
+    fn accelerating(a: f64, n: usize) -> Vec<(Nm, f64, f64)> {
+        (0..n).map(|k| ((0.5 * a * (k as f64 * 1000.0).powi(2)).round() as Nm, 0.0, 0.0)).collect()
+    }
+
+    fn ids(v: &[Violation]) -> Vec<&'static str> {
+        v.iter().map(|v| v.invariant.id()).collect()
+    }
+
+    #[test]
+    fn an_axis_within_its_acceleration_holds_and_one_above_it_does_not() {
+        assert_eq!(check(&trace(&accelerating(1e-3, 80), &[]), &lim(), None), vec![]);
+        // 1.5 × the limit for long enough to spend the one period allowed: INV-11.
+        assert_eq!(ids(&check(&trace(&accelerating(1.5e-3, 60), &[]), &lim(), None)), ["INV-11"]);
+        // A jump to full speed in one period (the known G33.1 violation): INV-11.
+        let mut jump = vec![(0, 0.0, 0.0); 3];
+        jump.extend((1..10).map(|k| (k * 50_000, 0.0, 0.0)));
+        assert_eq!(ids(&check(&trace(&jump, &[]), &lim(), None)), ["INV-11"]);
+    }
+
+    #[test]
+    fn a_speed_above_the_axis_rate_breaks_inv_11() {
+        // 120 µm per ms = 7.2 m/min, above 6 m/min (reached within its acceleration? no: INV-11
+        // reports the speed first or the acceleration; either way INV-11).
+        let fast: Vec<_> = (0..10).map(|k| (k * 120_000, 0.0, 0.0)).collect();
+        assert_eq!(ids(&check(&trace(&fast, &[]), &lim(), None)), ["INV-11"]);
+    }
+
+    #[test]
+    fn a_spindle_step_breaks_its_ramp_and_the_angle_must_integrate_the_speed() {
+        // 3 rpm/ms allowed: 2604 rpm -> 15 rpm in 1 ms (the known M29 violation): INV-12.
+        let mut angle = 0.0;
+        let mut s = Vec::new();
+        for rpm in [2604.0, 2604.0, 15.0, 15.0] {
+            s.push((0, rpm, angle));
+            angle += rpm * 6e-3;
+        }
+        assert_eq!(ids(&check(&trace(&s, &[]), &lim(), None)), ["INV-12"]);
+        // A steady spindle whose angle jumps 90° (an orientation that jumps): INV-13.
+        let jump = vec![(0, 0.0, 10.0), (0, 0.0, 10.0), (0, 0.0, 100.0)];
+        assert_eq!(ids(&check(&trace(&jump, &[]), &lim(), None)), ["INV-13"]);
+        // Steady at 1000 rpm, 6° per ms: holds, across the 360° wrap too.
+        let steady: Vec<_> = (0..100).map(|k| (0, 1000.0, k as f64 * 6.0)).collect();
+        assert_eq!(check(&trace(&steady, &[]), &lim(), None), vec![]);
+    }
+
+    #[test]
+    fn a_stall_and_an_emergency_stop_are_the_named_exemptions() {
+        let mut s: Vec<_> = (0..5).map(|k| (0, 1000.0, k as f64 * 6.0)).collect();
+        s.extend((0..5).map(|_| (0, 0.0, 24.0)));
+        assert_eq!(ids(&check(&trace(&s, &[]), &lim(), None)), ["INV-12"]);
+        assert_eq!(check(&trace(&s, &[(5, "spindle_stall")]), &lim(), None), vec![]);
+        assert_eq!(check(&trace(&s, &[(5, "emergency_stop")]), &lim(), None), vec![]);
+        assert!(!check(&trace(&s, &[(5, "reset")]), &lim(), None).is_empty(), "nothing else is exempt");
+    }
+
+    #[test]
+    fn a_following_tap_never_runs_ahead_of_lead_times_speed() {
+        // Lead 1 mm at 600 rpm: 10 µm per ms. The tap runs 20 µm per ms in the cut: INV-14.
+        let tap = TapSpec { axis: 2, lead_nm: 1_000_000, tolerance_nm: 2_000 };
+        let mut t = trace(&(0..10).map(|k| (-k * 20_000, 600.0, k as f64 * 3.6)).collect::<Vec<_>>(), &[]);
+        t.events.insert(0, TraceEvent { t_us: 0, event: Event::Phase(crate::trace::Phase::Cutting) });
+        let mut l = lim();
+        l.axis_accel[2] = 1.0;
+        assert_eq!(ids(&check(&t, &l, Some(tap))), ["INV-14"]);
+        let mut ok = trace(&(0..10).map(|k| (-k * 10_000, 600.0, k as f64 * 3.6)).collect::<Vec<_>>(), &[]);
+        ok.events.insert(0, TraceEvent { t_us: 0, event: Event::Phase(crate::trace::Phase::Cutting) });
+        assert_eq!(check(&ok, &l, Some(tap)), vec![]);
+    }
+}

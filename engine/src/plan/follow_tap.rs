@@ -1,10 +1,12 @@
 //! Tapping with the tap axis following the spindle's encoder, the spindle in speed mode (KND
-//! G93, seed 001; LinuxCNC G33.1): cut at lead × the spindle's speed; at the end point the spindle
-//! brakes (KND) or reverses (LinuxCNC) and the tap follows it (overshoot = lead × revolutions
-//! turned meanwhile, within an allowance); on KND once the drive reports zero speed the spindle
-//! turns the other way and the tap returns behind it to the start point, where both stop; the
-//! spindle then resumes its earlier direction. Rules KND-G93-* in `docs/rules/knd-lathe.md`,
-//! LCNC-G331-* in `docs/rules/linuxcnc.md`.
+//! G93, seed 001; LinuxCNC G33.1): cut at lead × the spindle's speed (LinuxCNC: from its next
+//! index pulse), reaching the end point still locked to it; there the spindle brakes (KND) or
+//! reverses (LinuxCNC) and the tap follows it (overshoot = lead × revolutions turned meanwhile,
+//! within an allowance); on KND once the drive reports zero speed the spindle turns the other way
+//! and the tap returns behind it to the start point, where both stop; LinuxCNC follows the
+//! reversed spindle out through the start, brakes with it past the start and moves back
+//! unsynchronised (DEC-87). The spindle then resumes its earlier direction. Rules KND-G93-* in
+//! `docs/rules/knd-lathe.md`, LCNC-G331-* in `docs/rules/linuxcnc.md`.
 //!
 //! The dialect positions to the start point; this builder takes over there and ends there.
 
@@ -44,6 +46,10 @@ pub struct FollowTap {
     pub not_turning: AlarmKind,
     /// Raised when the overshoot reaches `allowance_nm`.
     pub overshoot: AlarmKind,
+    /// LinuxCNC's way: the cut starts at the spindle's next index pulse, and the way out follows
+    /// the reversed spindle through the start, brakes with it past the start and moves back
+    /// unsynchronised (instead of the return to rest at the start).
+    pub linuxcnc: bool,
 }
 
 /// Appends the steps of one hole, from the start point back to it.
@@ -58,6 +64,7 @@ pub fn follow_tap(c: &FollowTap, out: &mut Vec<Step>) {
             kind,
             alarm,
             encoder_bound: c.encoder_bound,
+            index: c.linuxcnc,
         })
     };
     let zsp = c.zsp_timeout_us.map(|timeout_us| Step::AwaitSignal {
@@ -79,7 +86,19 @@ pub fn follow_tap(c: &FollowTap, out: &mut Vec<Step>) {
         out.push(zsp.clone());
     }
     out.push(Step::Phase(Phase::Retract));
-    out.push(follow(c.start, FollowKind::Return { rpm: c.rpm, forward: !c.forward }, c.overshoot));
+    if c.linuxcnc {
+        // Out behind the reversed spindle through the start, braking with it past the start (the
+        // same allowance), then back unsynchronised (shared/linuxcnc-real README items 5 and 7).
+        out.push(follow(c.start, FollowKind::Through { rpm: c.rpm, forward: !c.forward }, c.overshoot));
+        out.push(follow(
+            c.start.saturating_sub(dir * c.allowance_nm),
+            FollowKind::Brake { brake_us: c.brake_us },
+            c.overshoot,
+        ));
+        out.push(follow(c.start, FollowKind::Unsynced, c.overshoot));
+    } else {
+        out.push(follow(c.start, FollowKind::Return { rpm: c.rpm, forward: !c.forward }, c.overshoot));
+    }
     out.extend(zsp);
     let (code, effect) = if c.forward { (3, SpindleEffect::Forward) } else { (4, SpindleEffect::Reverse) };
     out.push(Step::Function { letter: 'M', code, effect });
@@ -106,6 +125,7 @@ mod tests {
             encoder_bound: true,
             not_turning: AlarmKind::SpindleNotTurning,
             overshoot: AlarmKind::TapOvershoot,
+            linuxcnc: false,
         };
         let mut v = Vec::new();
         follow_tap(&c, &mut v);

@@ -136,6 +136,9 @@ pub struct Follow {
     /// (`SpindleNotTurning`), and a spindle whose braking the axis cannot follow any farther
     /// (`Brake` cut short) goes on braking to rest.
     pub encoder_bound: bool,
+    /// `Cut`: start at the spindle's next index pulse (LinuxCNC: a synchronised move waits for
+    /// `spindle.N.index-enable` to clear).
+    pub index: bool,
 }
 
 /// What the spindle does while an axis follows it.
@@ -158,6 +161,18 @@ pub enum FollowKind {
         /// Direction.
         forward: bool,
     },
+    /// The spindle, from rest, is commanded to `rpm` (`forward`: M03 sense) at its speed-mode
+    /// ramp; the axis follows it, locked, through the target without stopping (a `Brake` carries
+    /// it on): LinuxCNC's G33.1 way out.
+    Through {
+        /// Speed, rpm.
+        rpm: u32,
+        /// Direction.
+        forward: bool,
+    },
+    /// The axis alone, unsynchronised, to the target at its rapid rate and time constant; the
+    /// spindle keeps its own state (LinuxCNC's final move back to the G33.1 start).
+    Unsynced,
 }
 
 /// The overload watch of a GSK rigid tapping cycle (word D or parameter 271).

@@ -248,6 +248,7 @@ impl KndInterp {
                 encoder_bound: true,
                 not_turning: AlarmKind::SpindleNotTurning,
                 overshoot: AlarmKind::TapOvershoot,
+                linuxcnc: false,
             },
             body,
         );

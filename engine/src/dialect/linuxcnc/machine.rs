@@ -655,6 +655,7 @@ impl Machine {
                 encoder_bound: false,
                 not_turning: AlarmKind::LcncSpindle,
                 overshoot: AlarmKind::LcncTapOvershoot,
+                linuxcnc: true,
             },
             out,
         );
