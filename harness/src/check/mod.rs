@@ -21,6 +21,7 @@ pub mod keypoints;
 pub mod keypoints_cmp;
 pub mod reference;
 pub mod report;
+pub mod sync;
 pub mod tolerance;
 
 use nc_engine::trace::{Signal, Trace, TraceEvent};
@@ -93,6 +94,9 @@ pub struct Figures {
     pub matched_events: usize,
     /// Largest |sync error|, mm.
     pub max_sync_error_mm: f64,
+    /// Recorded samples at which the synchronisation with the spindle was compared (0: the
+    /// sync error was not compared at all: "n/a", not 0 mm).
+    pub sync_samples: u64,
     /// Largest position excess beyond the envelope, mm.
     pub max_envelope_excess_mm: f64,
     /// Pecks (cuts) in the reference / recorded.
@@ -203,6 +207,7 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
         reference_events: compare_totals(reference),
         matched_events: 0,
         max_sync_error_mm: c.max_sync_nm / 1e6,
+        sync_samples: c.sync_samples,
         max_envelope_excess_mm: c.max_env_nm / 1e6,
         pecks: (r.keys.pecks().len(), keys.pecks().len()),
     };

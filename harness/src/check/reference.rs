@@ -40,6 +40,10 @@ pub struct Reference<'a> {
     pub phases: Vec<(i64, Phase)>,
     /// Inputs by time (name, value).
     pub inputs: Vec<(i64, String, String)>,
+    /// The cumulative unwrapped spindle angle at each sample, milli-degrees.
+    pub cum_mdeg: Vec<f64>,
+    /// The synchronised moves (rigid strokes, thread passes, encoder-following moves).
+    pub sync: Vec<super::sync::Window>,
 }
 
 /// The change of a spindle angle from `a0` to `a1` (milli-degrees) over `dt_us`, unwrapped using
@@ -116,7 +120,42 @@ impl<'a> Reference<'a> {
         for e in &trace.events {
             kt.event(e.t_us as i64, &e.event);
         }
-        Reference { trace, t, s, tap, keys: kt.finish(), end_us, phases, inputs }
+        let cum_mdeg = super::sync::cumulative_angle(&t, &s);
+        let mut r = Reference {
+            trace,
+            t,
+            s,
+            tap,
+            keys: kt.finish(),
+            end_us,
+            phases,
+            inputs,
+            cum_mdeg,
+            sync: Vec::new(),
+        };
+        r.sync = super::sync::windows(&r);
+        r
+    }
+
+    /// The axis that travels furthest over [t0, t1] (None: none moves).
+    pub fn furthest_axis(&self, t0: i64, t1: i64) -> Option<usize> {
+        let i0 = self.t.partition_point(|&x| x < t0);
+        let i1 = self.t.partition_point(|&x| x <= t1);
+        let seg = self.s.get(i0..i1.max(i0))?;
+        let mut travel = [0i64; AXES];
+        for w in seg.windows(2) {
+            for (a, tr) in travel.iter_mut().enumerate() {
+                *tr += (w[1].axes[a] - w[0].axes[a]).abs();
+            }
+        }
+        let slot = (0..AXES).max_by_key(|&a| travel[a])?;
+        (travel[slot] > 0).then_some(slot)
+    }
+
+    /// The index in [`Reference::sync`] of the synchronised move in force at `t` (None: none).
+    pub fn sync_index(&self, t: i64) -> Option<usize> {
+        let k = self.sync.partition_point(|w| w.t0 <= t);
+        k.checked_sub(1).filter(|&i| t <= self.sync[i].t1)
     }
 
     /// The axes of the trace.

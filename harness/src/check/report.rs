@@ -31,14 +31,18 @@ pub fn summary(rep: &Report, reference: &Trace, title: &str) -> String {
     let _ = writeln!(s, "{title}");
     let _ = writeln!(
         s,
-        "aligned on the {} (reference = recorded {:+} µs); {} recorded events, {} samples; {}/{} reference events matched; max sync error {} mm; pecks {} reference, {} recorded",
+        "aligned on the {} (reference = recorded {:+} µs); {} recorded events, {} samples; {}/{} reference events matched; max sync error {}; pecks {} reference, {} recorded",
         rep.anchor,
         rep.offset_us,
         f.recorded_events,
         f.recorded_samples,
         f.matched_events,
         f.reference_events,
-        fixed((f.max_sync_error_mm * 1e6).round() as i64, 6),
+        if f.sync_samples > 0 {
+            format!("{} mm ({} samples)", fixed((f.max_sync_error_mm * 1e6).round() as i64, 6), f.sync_samples)
+        } else {
+            "n/a (not compared)".into()
+        },
         f.pecks.0,
         f.pecks.1
     );

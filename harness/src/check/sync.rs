@@ -1,0 +1,277 @@
+//! Synchronisation of an axis with the spindle (`CHK-SYNC-01`), during every synchronised move of
+//! the reference: rigid-tapping strokes (RGSPP/RGSPM on in the reference), thread passes (G32,
+//! G92, G92.3, G76, G33, cycle 832) and moves that follow the spindle's encoder (KND G93,
+//! LinuxCNC G33.1).
+//!
+//! The windows come from the **reference** (its stroke signals, its blocks and phases), never
+//! from the recording: a stroke-end edge recorded late (a PLC scan) does not stretch a stroke
+//! over the rapid that follows it, and a recording without stroke signals (LinuxCNC, a CSV of
+//! positions) is still compared.
+//!
+//! At each recorded sample inside a window, the reference's time is found at which its window
+//! axis stood where the recorded axis stands (the crossing nearest in time, within the event
+//! window); the recorded spindle angle is compared with the reference's angle there, and the
+//! difference turned into mm along the axis with the reference's local lead. That is the
+//! position the axis has at the recorded angle: it measures the lead (its drift from the
+//! window's first compared sample) and, where the reference starts its pass at a set angle
+//! after the index (G92.3, cycle 832), the start angle too (the error itself), whatever the
+//! clocks and sample times.
+
+use nc_engine::trace::{Event, Phase, Signal, Signals, Trace};
+
+use super::reference::{unwrap_delta, Reference};
+
+/// What kind of synchronised move a window is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// A rigid-tapping stroke (RGSPP or RGSPM on).
+    Stroke,
+    /// A thread pass (feed locked to the spindle).
+    Thread,
+    /// A move following the spindle's encoder (KND G93, LinuxCNC G33.1).
+    Follow,
+}
+
+impl Kind {
+    /// As text.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Stroke => "rigid tapping stroke",
+            Kind::Thread => "thread pass",
+            Kind::Follow => "synchronised move",
+        }
+    }
+}
+
+/// One synchronised move of the reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Window {
+    /// Start and end, reference time.
+    pub t0: i64,
+    /// End.
+    pub t1: i64,
+    /// The axis locked to the spindle (the one that travels furthest).
+    pub slot: usize,
+    /// 2 for an axis reported as a diameter.
+    pub div: f64,
+    /// The kind.
+    pub kind: Kind,
+    /// The reference starts it at a set angle after the index: the angle itself is compared,
+    /// not only the lead.
+    pub locked: bool,
+    /// Its number among the windows of its kind (1-based).
+    pub n: usize,
+}
+
+/// The G codes of a dialect that lock the feed to the spindle: (threads, followers, the ones
+/// that start at a set angle after the index).
+fn sync_codes(dialect: &str) -> (&'static [&'static str], &'static [&'static str], &'static [&'static str]) {
+    match dialect {
+        "gsk-lathe" => (&["G32", "G92", "G92.3", "G76", "G33"], &[], &["G92.3"]),
+        "knd-lathe" => (&["G32", "G92", "G76"], &["G93"], &[]),
+        "linuxcnc" => (&["G33", "G76"], &["G33.1"], &[]),
+        _ => (&[], &[], &[]),
+    }
+}
+
+/// The motion-group G codes of a block's text (a later one wins), upper case, comments out.
+fn motion_code(text: &str, lathe: bool) -> Option<String> {
+    let mut out = None;
+    let mut depth = 0;
+    let up = text.to_ascii_uppercase();
+    let b = up.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'(' => depth += 1,
+            b')' => depth -= 1,
+            b';' if depth == 0 => break,
+            b'G' if depth == 0 => {
+                let j =
+                    (i + 1..b.len()).find(|&k| !(b[k].is_ascii_digit() || b[k] == b'.')).unwrap_or(b.len());
+                if let Ok(v) = up[i + 1..j].parse::<f64>() {
+                    let code = format!("G{}", up[i + 1..j].trim_start_matches('0'));
+                    let code = if code == "G" || code.starts_with("G.") {
+                        format!("G0{}", &code[1..])
+                    } else {
+                        code
+                    };
+                    let motion = matches!(v as u32, 0..=3 | 32..=34 | 73..=89 | 92 | 93)
+                        || (lathe && matches!(v as u32, 90 | 94));
+                    if motion && (v != 92.0 || lathe) {
+                        out = Some(code);
+                    }
+                }
+                i = j;
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The synchronised moves of `r`, in time order.
+pub fn windows(r: &Reference) -> Vec<Window> {
+    let trace: &Trace = r.trace;
+    let dialect = trace.meta.dialect.to_string();
+    let lathe = dialect.contains("lathe");
+    let heidenhain = dialect == "heidenhain";
+    let (threads, follows, locked) = sync_codes(&dialect);
+    let mut raw: Vec<(i64, i64, Kind, bool)> = Vec::new();
+    let mut sig = Signals::default();
+    let mut stroke_from: Option<i64> = None;
+    let mut code: Option<String> = None;
+    let mut open: Option<(i64, Kind, bool)> = None;
+    for e in &trace.events {
+        let t = e.t_us as i64;
+        match &e.event {
+            Event::Signal { signal, value } if matches!(signal, Signal::Rgspp | Signal::Rgspm) => {
+                sig.set(*signal, *value);
+                let on = sig.get(Signal::Rgspp) || sig.get(Signal::Rgspm);
+                match (on, stroke_from) {
+                    (true, None) => stroke_from = Some(t),
+                    (false, Some(a)) => {
+                        raw.push((a, t, Kind::Stroke, false));
+                        stroke_from = None;
+                    }
+                    _ => {}
+                }
+            }
+            Event::Block { text, .. } => {
+                if let Some(c) = motion_code(text, lathe) {
+                    code = Some(c);
+                }
+            }
+            Event::Phase(p) => {
+                if let Some((a, k, l)) = open.take() {
+                    raw.push((a, t, k, l));
+                }
+                let c = code.as_deref().unwrap_or("");
+                let kind = if heidenhain && *p == Phase::Cutting {
+                    Some((Kind::Thread, true))
+                } else if follows.contains(&c) && matches!(p, Phase::Cutting | Phase::Retract) {
+                    Some((Kind::Follow, false))
+                } else if threads.contains(&c) && *p == Phase::Cutting {
+                    Some((Kind::Thread, locked.contains(&c)))
+                } else {
+                    None
+                };
+                open = kind.map(|(k, l)| (t, k, l));
+            }
+            _ => {}
+        }
+    }
+    if let Some((a, k, l)) = open {
+        raw.push((a, r.end_us, k, l));
+    }
+    if let Some(a) = stroke_from {
+        raw.push((a, r.end_us, Kind::Stroke, false));
+    }
+    raw.sort_by_key(|w| w.0);
+    let mut counts = [0usize; 3];
+    let mut out = Vec::new();
+    for (t0, t1, kind, locked) in raw {
+        let slot = match kind {
+            Kind::Stroke => match r.tap {
+                Some(tap) => tap.slot,
+                None => continue,
+            },
+            _ => match r.furthest_axis(t0, t1) {
+                Some(s) => s,
+                None => continue,
+            },
+        };
+        let div = if r.axes().iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
+        let k = kind as usize;
+        counts[k] += 1;
+        out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k] });
+    }
+    out
+}
+
+/// The synchronisation error at one recorded sample, nm along the axis (physical: a diameter
+/// axis as a radius): recorded position − the reference's position at the recorded angle.
+/// None where it cannot be told (no crossing near, the axis or the spindle standing, the axis
+/// within `still_nm` of where the reference's move starts or ends: a recorded axis still waiting
+/// there, for the index or a late edge, tells nothing of the lead).
+pub fn error_at(
+    r: &Reference,
+    w: &Window,
+    t: i64,
+    pos: i64,
+    angle_mdeg: i64,
+    slack_us: i64,
+    still_nm: i64,
+) -> Option<f64> {
+    let lo = (t - slack_us).max(w.t0);
+    let hi = (t + slack_us).min(w.t1);
+    if lo >= hi {
+        return None;
+    }
+    let ends = [r.pos_at(w.t0, w.slot)?, r.pos_at(w.t1, w.slot)?];
+    if ends.iter().any(|&e| (pos as f64 - e).abs() <= still_nm as f64) {
+        return None;
+    }
+    let i0 = r.t.partition_point(|&x| x < lo);
+    let i1 = r.t.partition_point(|&x| x <= hi);
+    let mut best: Option<(i64, usize, f64)> = None;
+    for i in i0..i1.saturating_sub(1) {
+        let (a, b) = (r.s[i].axes[w.slot], r.s[i + 1].axes[w.slot]);
+        if (a - pos).signum() * (b - pos).signum() > 0 || (b - a).abs() < 100 {
+            continue;
+        }
+        let f = (pos - a) as f64 / (b - a) as f64;
+        let tc = r.t[i] + (f * (r.t[i + 1] - r.t[i]) as f64) as i64;
+        if best.is_none_or(|(bt, _, _)| (tc - t).abs() < (bt - t).abs()) {
+            best = Some((tc, i, f));
+        }
+    }
+    let (_, i, f) = best?;
+    let d_ang = r.cum_mdeg[i + 1] - r.cum_mdeg[i];
+    if d_ang.abs() < 1.0 {
+        return None;
+    }
+    let lead_nm_per_mdeg = (r.s[i + 1].axes[w.slot] - r.s[i].axes[w.slot]) as f64 / d_ang;
+    let ref_angle = (r.cum_mdeg[i] + f * d_ang).rem_euclid(360_000.0);
+    let mut delta = (angle_mdeg as f64 - ref_angle).rem_euclid(360_000.0);
+    if delta > 180_000.0 {
+        delta -= 360_000.0;
+    }
+    Some(-delta * lead_nm_per_mdeg / w.div)
+}
+
+/// The cumulative unwrapped spindle angle at each reference sample, milli-degrees.
+pub fn cumulative_angle(r_t: &[i64], r_s: &[nc_engine::trace::Sample]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(r_s.len());
+    let mut acc = r_s.first().map_or(0.0, |s| s.spindle_mdeg as f64);
+    for (k, s) in r_s.iter().enumerate() {
+        if k > 0 {
+            let p = &r_s[k - 1];
+            acc += unwrap_delta(
+                p.spindle_mdeg,
+                p.spindle_mrpm,
+                s.spindle_mdeg,
+                s.spindle_mrpm,
+                r_t[k] - r_t[k - 1],
+            );
+        }
+        out.push(acc);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn motion_codes_are_read_from_block_text() {
+        assert_eq!(motion_code("G92.3 X36 Z-20 F4", true).as_deref(), Some("G92.3"));
+        assert_eq!(motion_code("g33.1 z-10 k1.5 (g0 in a comment)", false).as_deref(), Some("G33.1"));
+        assert_eq!(motion_code("G98 G21 X5", true), None);
+        assert_eq!(motion_code("G92 X0 Y0", false), None, "Fanuc G92 sets coordinates");
+        assert_eq!(motion_code("G00 X1 ; G32", true).as_deref(), Some("G0"));
+    }
+}
