@@ -173,3 +173,36 @@ fn linuxcnc_without_stroke_signals_says_na_and_still_compares_the_sync() {
     let r = check(&s, &drilling, record(&drilling, Rec::PLC_SCAN));
     assert!(show(&r, &drilling).contains("max sync error n/a"), "{}", show(&r, &drilling));
 }
+
+/// Issue 14 §2: MF falling 10 ms before FIN rises passed (both are in the same µs in the
+/// reference, within 20 ms of it in the recording, and the order check fired only on a strictly
+/// earlier reference time): the handshake is a protocol fact checked on the recording itself.
+#[test]
+fn a_strobe_falling_before_its_fin_is_caught_com_plc_01() {
+    let s = scenario("scenarios/gsk/clamp/clamp_codes_frame_the_hole.yaml");
+    let reference = reference(&s);
+    let fin_rises: Vec<u64> = reference.edges(Signal::Fin).filter(|e| e.1).map(|e| e.0).collect();
+    let mut t = reference.clone();
+    let mut moved = 0;
+    for e in &mut t.events {
+        if matches!(e.event, Event::Signal { signal: Signal::Mf, value: false })
+            && fin_rises.contains(&e.t_us)
+        {
+            e.t_us -= 10_000;
+            moved += 1;
+        }
+    }
+    assert!(moved > 0);
+    t.events.sort_by_key(|e| e.t_us);
+    let good = check(&s, &reference, record(&reference, Rec::PLC_SCAN));
+    assert!(good.conformant(), "{}", show(&good, &reference));
+    for rec in [Rec::EXACT, Rec::PLC_SCAN] {
+        let r = check(&s, &reference, record(&t, rec));
+        let d = r.divergences.iter().find(|d| d.check == "CHK-EVT-05");
+        assert!(
+            d.is_some_and(|d| d.rule == "COM-PLC-01" && d.what.contains("MF ↓ before FIN ↑")),
+            "{}",
+            show(&r, &reference)
+        );
+    }
+}

@@ -106,6 +106,8 @@ pub struct Comparator<'r> {
     last_sample_t: Option<i64>,
     motion: Option<MotionDetector>,
     marks: Vec<(i64, i64)>,
+    handshake: super::handshake::Handshake,
+    ref_handshake: Vec<super::handshake::Fault>,
 }
 
 impl<'r> Comparator<'r> {
@@ -170,6 +172,8 @@ impl<'r> Comparator<'r> {
             last_sample_t: None,
             motion,
             marks: Vec::new(),
+            handshake: Default::default(),
+            ref_handshake: super::handshake::faults_of(r.trace),
         }
     }
 
@@ -335,6 +339,9 @@ impl<'r> Comparator<'r> {
                 }
                 self.sig.set(*signal, *value);
                 self.seen.set(*signal, true);
+                let mut faults = Vec::new();
+                self.handshake.edge(t, *signal, *value, &mut faults);
+                super::handshake::report(self, faults);
                 self.keys.event(t, &ev.event);
                 self.discrete(t, &ev);
             }
@@ -436,6 +443,11 @@ impl<'r> Comparator<'r> {
             "never recorded".into(),
             "-".into(),
         );
+    }
+
+    /// The reference's own handshake faults (a reset dropping a strobe without FIN).
+    pub(super) fn reference_handshake_faults(&self) -> &[super::handshake::Fault] {
+        &self.ref_handshake
     }
 
     /// Whether the recording carries `s` (declares it, or showed an edge of it).
@@ -579,6 +591,9 @@ impl<'r> Comparator<'r> {
                 self.aligned(p);
             }
         }
+        let mut faults = Vec::new();
+        std::mem::take(&mut self.handshake).finish(&mut faults);
+        super::handshake::report(self, faults);
         self.close_sync();
         for k in 0..self.env_runs.len() {
             self.close_env(k);

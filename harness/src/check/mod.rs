@@ -16,6 +16,7 @@
 pub mod carried;
 pub mod compare;
 pub mod events;
+pub mod handshake;
 pub mod html;
 pub mod keypoints;
 pub mod keypoints_cmp;
