@@ -182,6 +182,19 @@ impl<'a> Reference<'a> {
         }
     }
 
+    /// The spindle angle at `t` (milli-degrees, 0 ≤ a < 360 000), interpolated unwrapped.
+    pub fn angle_at(&self, t: i64) -> Option<f64> {
+        let i = self.idx_at(t).or(if self.s.is_empty() { None } else { Some(0) })?;
+        let a = match self.cum_mdeg.get(i + 1) {
+            Some(&n) if self.t[i] <= t => {
+                let f = (t - self.t[i]) as f64 / (self.t[i + 1] - self.t[i]).max(1) as f64;
+                self.cum_mdeg[i] + (n - self.cum_mdeg[i]) * f
+            }
+            _ => self.cum_mdeg[i],
+        };
+        Some(a.rem_euclid(360_000.0))
+    }
+
     /// Position of `slot` at `t`, interpolated.
     pub fn pos_at(&self, t: i64, slot: usize) -> Option<f64> {
         self.value_at(t, |s| s.axes[slot])
