@@ -107,14 +107,14 @@ fn scale_lead(reference: &Trace, k: f64) -> Trace {
 /// passes. Every synchronised move: G92.3, cycle 832, G33.1, G33, G76, KND G93.
 #[test]
 fn a_lead_error_of_three_per_mille_is_caught_in_every_synchronised_move() {
-    for rel in [
-        "scenarios/gsk/g92_3/seed_example.yaml",
-        "scenarios/heidenhain/c832/seed_example.yaml",
-        "scenarios/linuxcnc/g331/standard.yaml",
-        "scenarios/linuxcnc/g331/g33.yaml",
-        "scenarios/linuxcnc/g76/passes.yaml",
-        "scenarios/knd/g93/standard.yaml",
-        "scenarios/gsk/peck/standard_seed_example.yaml",
+    for (rel, rule) in [
+        ("scenarios/gsk/g92_3/seed_example.yaml", "GSK-G923-11"),
+        ("scenarios/heidenhain/c832/seed_example.yaml", "HDH-C832-05"),
+        ("scenarios/linuxcnc/g331/standard.yaml", "LCNC-G331-01"),
+        ("scenarios/linuxcnc/g331/g33.yaml", "LCNC-G33-01"),
+        ("scenarios/linuxcnc/g76/passes.yaml", "LCNC-G76-01"),
+        ("scenarios/knd/g93/standard.yaml", "KND-G93-03"),
+        ("scenarios/gsk/peck/standard_seed_example.yaml", "COM-SYNC-01"),
     ] {
         let s = scenario(rel);
         let reference = reference(&s);
@@ -125,8 +125,8 @@ fn a_lead_error_of_three_per_mille_is_caught_in_every_synchronised_move() {
         assert!(good.figures.sync_samples > 10, "{rel}: compared");
         let bad = check(&s, &reference, record(&scale_lead(&reference, 1.003), Rec::PLC_SCAN));
         assert!(
-            bad.divergences.iter().any(|d| d.check == "CHK-SYNC-01"),
-            "{rel}: a 0.3 % lead error not caught:\n{}",
+            bad.divergences.iter().any(|d| d.check == "CHK-SYNC-01" && d.rule == rule),
+            "{rel}: a 0.3 % lead error not caught under {rule}:\n{}",
             show(&bad, &reference)
         );
     }

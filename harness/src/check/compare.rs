@@ -211,6 +211,10 @@ impl<'r> Comparator<'r> {
             overload: self.r.overload_by(t + ms_us(self.tol.envelope_ms).max(ms_us(self.tol.event_ms))),
             scenario_rules: self.rules.clone(),
             phase: Some(self.r.phase_at(t)),
+            sync_rule: self
+                .r
+                .sync_index(t)
+                .and_then(|k| super::tolerance::sync_rule(&self.dialect, self.r.sync[k].code)),
         }
     }
 

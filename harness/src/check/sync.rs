@@ -61,6 +61,8 @@ pub struct Window {
     pub locked: bool,
     /// Its number among the windows of its kind (1-based).
     pub n: usize,
+    /// The G code of the block it belongs to (None: a rigid stroke, a Klartext cycle).
+    pub code: Option<&'static str>,
 }
 
 /// The G codes of a dialect that lock the feed to the spindle: (threads, followers, the ones
@@ -119,11 +121,11 @@ pub fn windows(r: &Reference) -> Vec<Window> {
     let lathe = dialect.contains("lathe");
     let heidenhain = dialect == "heidenhain";
     let (threads, follows, locked) = sync_codes(&dialect);
-    let mut raw: Vec<(i64, i64, Kind, bool)> = Vec::new();
+    let mut raw: Vec<(i64, i64, Kind, bool, Option<&'static str>)> = Vec::new();
     let mut sig = Signals::default();
     let mut stroke_from: Option<i64> = None;
     let mut code: Option<String> = None;
-    let mut open: Option<(i64, Kind, bool)> = None;
+    let mut open: Option<(i64, Kind, bool, Option<&'static str>)> = None;
     for e in &trace.events {
         let t = e.t_us as i64;
         match &e.event {
@@ -133,7 +135,7 @@ pub fn windows(r: &Reference) -> Vec<Window> {
                 match (on, stroke_from) {
                     (true, None) => stroke_from = Some(t),
                     (false, Some(a)) => {
-                        raw.push((a, t, Kind::Stroke, false));
+                        raw.push((a, t, Kind::Stroke, false, None));
                         stroke_from = None;
                     }
                     _ => {}
@@ -145,10 +147,11 @@ pub fn windows(r: &Reference) -> Vec<Window> {
                 }
             }
             Event::Phase(p) => {
-                if let Some((a, k, l)) = open.take() {
-                    raw.push((a, t, k, l));
+                if let Some((a, k, l, g)) = open.take() {
+                    raw.push((a, t, k, l, g));
                 }
                 let c = code.as_deref().unwrap_or("");
+                let g = threads.iter().chain(follows).find(|x| **x == c).copied();
                 let kind = if heidenhain && *p == Phase::Cutting {
                     Some((Kind::Thread, true))
                 } else if follows.contains(&c) && matches!(p, Phase::Cutting | Phase::Retract) {
@@ -158,21 +161,21 @@ pub fn windows(r: &Reference) -> Vec<Window> {
                 } else {
                     None
                 };
-                open = kind.map(|(k, l)| (t, k, l));
+                open = kind.map(|(k, l)| (t, k, l, g));
             }
             _ => {}
         }
     }
-    if let Some((a, k, l)) = open {
-        raw.push((a, r.end_us, k, l));
+    if let Some((a, k, l, g)) = open {
+        raw.push((a, r.end_us, k, l, g));
     }
     if let Some(a) = stroke_from {
-        raw.push((a, r.end_us, Kind::Stroke, false));
+        raw.push((a, r.end_us, Kind::Stroke, false, None));
     }
     raw.sort_by_key(|w| w.0);
     let mut counts = [0usize; 3];
     let mut out = Vec::new();
-    for (t0, t1, kind, locked) in raw {
+    for (t0, t1, kind, locked, code) in raw {
         let slot = match kind {
             Kind::Stroke => match r.tap {
                 Some(tap) => tap.slot,
@@ -186,7 +189,7 @@ pub fn windows(r: &Reference) -> Vec<Window> {
         let div = if r.axes().iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
         let k = kind as usize;
         counts[k] += 1;
-        out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k] });
+        out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k], code });
     }
     out
 }
