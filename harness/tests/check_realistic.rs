@@ -206,3 +206,54 @@ fn a_strobe_falling_before_its_fin_is_caught_com_plc_01() {
         );
     }
 }
+
+/// Issue 14 §5: a timing shift beyond its window reads as one line ("RGSPP rises 150 ms early"),
+/// not as a missing and an extra event; late ones the same.
+#[test]
+fn a_timing_shift_beyond_its_window_reads_as_one_line() {
+    let s = scenario("scenarios/common/doc_examples/quick_start.yaml");
+    let reference = reference(&s);
+    let rise = edge_time(&reference, Signal::Rgspp, true, 0);
+    for (shift, word) in [(-150_000i64, "early"), (150_000, "late")] {
+        let mut t = reference.clone();
+        for e in &mut t.events {
+            if e.t_us == rise && matches!(e.event, Event::Signal { signal: Signal::Rgspp, value: true }) {
+                e.t_us = (e.t_us as i64 + shift) as u64;
+            }
+        }
+        t.events.sort_by_key(|e| e.t_us);
+        let r = check(&s, &reference, record(&t, Rec::EXACT));
+        let text = show(&r, &reference);
+        assert!(
+            r.divergences
+                .iter()
+                .any(|d| d.what == format!("RGSPP rises 150 ms {word}") && d.check == "CHK-EVT-01"),
+            "{text}"
+        );
+        assert!(
+            !r.divergences
+                .iter()
+                .any(|d| d.what.starts_with("RGSPP")
+                    && matches!(d.check.as_str(), "CHK-EVT-02" | "CHK-EVT-03")),
+            "no missing/extra line for the shifted edge:\n{text}"
+        );
+    }
+}
+
+/// Issue 14 §5: a recording that stops early is called truncated, at its last time, in one line.
+#[test]
+fn a_recording_that_stops_early_is_called_truncated() {
+    let s = scenario("scenarios/gsk/peck/high_speed_seed_example.yaml");
+    let reference = reference(&s);
+    let end = reference.events.last().unwrap().t_us;
+    let rec: Vec<TraceEvent> = record(&reference, Rec::PLC_SCAN)
+        .into_iter()
+        .filter(|e| e.t_us < Rec::PLC_SCAN.shift_us + end / 2)
+        .collect();
+    let r = check(&s, &reference, rec);
+    let text = show(&r, &reference);
+    let trunc: Vec<_> =
+        r.divergences.iter().filter(|d| d.what.starts_with("recording truncated at")).collect();
+    assert_eq!(trunc.len(), 1, "{text}");
+    assert!(!r.divergences.iter().any(|d| d.what.ends_with("missing")), "{text}");
+}

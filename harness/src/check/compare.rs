@@ -101,6 +101,10 @@ pub struct Comparator<'r> {
     /// Reference edges never recorded, judged at the end (a signal the recording may not
     /// carry, a pulse between two rows).
     pub(super) missing_edges: Vec<(Key, i64)>,
+    /// Reference functions and alarms never recorded, judged at the end (a shift, a truncation).
+    pub(super) missing_other: Vec<(Key, i64)>,
+    /// Recorded events the reference does not have, judged at the end (a shift).
+    pub(super) extras: Vec<(Key, i64)>,
     /// Longest gap between two recorded samples within the reference's run, µs.
     pub(super) max_gap_us: i64,
     last_sample_t: Option<i64>,
@@ -168,6 +172,8 @@ impl<'r> Comparator<'r> {
             not_comparable: Vec::new(),
             seen: Signals::default(),
             missing_edges: Vec::new(),
+            missing_other: Vec::new(),
+            extras: Vec::new(),
             max_gap_us: 0,
             last_sample_t: None,
             motion,
@@ -389,29 +395,13 @@ impl<'r> Comparator<'r> {
     fn flush_findings(&mut self) {
         for f in std::mem::take(&mut self.findings) {
             match f {
-                Finding::Late(k, tr, t, w) => self.diverge(
-                    k.topic(),
-                    "CHK-EVT-01",
-                    format!("{} time", k.describe()),
-                    tr,
-                    format!("at {} ± {}", ms(tr.max(0) as u64), ms(w as u64)),
-                    format!("at {}", ms(t.max(0) as u64)),
-                    format!("{} beyond the window", ms(((t - tr).abs() - w) as u64)),
-                ),
+                Finding::Late(k, tr, t, w) => super::shift::shifted(self, &k, tr, t, w),
                 Finding::Missing(k @ Key::Edge(..), tr) => self.missing_edges.push((k, tr)),
-                Finding::Missing(k, tr) => self.report_missing(k, tr),
-                Finding::Extra(k, t) => self.diverge(
-                    k.topic(),
-                    "CHK-EVT-03",
-                    match k {
-                        Key::Alarm(_) => format!("unexpected {}", k.describe()),
-                        _ => format!("{} extra", k.describe()),
-                    },
-                    t,
-                    format!("no further {}", k.describe()),
-                    format!("{} at {}", k.describe(), ms(t.max(0) as u64)),
-                    "-".into(),
-                ),
+                Finding::Missing(k, tr) => self.missing_other.push((k, tr)),
+                Finding::Extra(k, t) if self.extras.len() < super::MAX_DIVERGENCES => {
+                    self.extras.push((k, t))
+                }
+                Finding::Extra(k, t) => self.report_extra(k, t),
                 Finding::Order(k, tr, t, before, tb) => self.diverge(
                     k.topic(),
                     "CHK-EVT-04",
@@ -434,6 +424,32 @@ impl<'r> Comparator<'r> {
                 ),
             }
         }
+    }
+
+    /// A recorded event the reference does not have (`CHK-EVT-03`).
+    pub(super) fn report_extra(&mut self, k: Key, t: i64) {
+        self.diverge(
+            k.topic(),
+            "CHK-EVT-03",
+            match k {
+                Key::Alarm(_) => format!("unexpected {}", k.describe()),
+                _ => format!("{} extra", k.describe()),
+            },
+            t,
+            format!("no further {}", k.describe()),
+            format!("{} at {}", k.describe(), ms(t.max(0) as u64)),
+            "-".into(),
+        );
+    }
+
+    /// The aligned time of the last recorded event.
+    pub(super) fn last_recorded_t(&self) -> i64 {
+        self.last_t
+    }
+
+    /// The scenario's first rule (for findings about the whole recording).
+    pub(super) fn rules_first(&self) -> String {
+        self.rules.first().cloned().unwrap_or_else(|| "COM-TIME-01".into())
     }
 
     /// A reference event never recorded (`CHK-EVT-02`).
@@ -608,6 +624,7 @@ impl<'r> Comparator<'r> {
             m.finish(&mut self.findings);
         }
         self.flush_findings();
+        super::shift::resolve(self);
         super::carried::judge_missing_edges(self);
         let keys = std::mem::replace(&mut self.keys, KeyTracker::new(None)).finish();
         if super::carried::key_points_comparable(self) {

@@ -22,6 +22,7 @@ pub mod keypoints;
 pub mod keypoints_cmp;
 pub mod reference;
 pub mod report;
+pub mod shift;
 pub mod sync;
 pub mod tolerance;
 
