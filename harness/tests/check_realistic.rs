@@ -257,3 +257,52 @@ fn a_recording_that_stops_early_is_called_truncated() {
     assert_eq!(trunc.len(), 1, "{text}");
     assert!(!r.divergences.iter().any(|d| d.what.ends_with("missing")), "{text}");
 }
+
+/// Issue 14 §3: the recordings of LinuxCNC's real motion controller (`../shared/linuxcnc-real`,
+/// CSV of positions and spindle, no M functions, no STL, no tap strokes) align by themselves on
+/// the first spindle start, at the offset that had to be computed by hand there (the first row
+/// with the spindle turning tied to the reference's 1 ms), and the report says how it aligned
+/// and how well it fits.
+#[test]
+fn real_linuxcnc_recordings_align_by_themselves() {
+    let dir = root().join("../shared/linuxcnc-real");
+    assert!(dir.is_dir(), "{} (the project's shared material) is missing", dir.display());
+    let out = std::env::temp_dir().join(format!("nc-conform-lcnc-align-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    for p in ["g331", "g84", "g81"] {
+        let csv = dir.join(format!("recordings/csv/{p}.csv"));
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let mut lines = text.lines();
+        let col = lines.next().unwrap().split(',').position(|c| c == "spindle_rpm").unwrap();
+        let first: i64 = lines
+            .find(|l| l.split(',').nth(col).unwrap().parse::<f64>().unwrap() != 0.0)
+            .map(|l| l.split(',').next().unwrap().parse().unwrap())
+            .unwrap();
+        let by_hand = (1 - first) * 1000;
+        let report = out.join(format!("{p}.json"));
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_nc-conform"))
+            .current_dir(&dir)
+            .args(["check", &format!("programs/{p}.ngc"), "--dialect", "linuxcnc"])
+            .args(["--params", "linuxcnc-sim.params.yaml", "--map", "linuxcnc-map.yaml"])
+            .args(["--trace", &format!("recordings/csv/{p}.csv"), "--report"])
+            .arg(&report)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&run.stdout);
+        assert!(
+            run.status.code().is_some_and(|c| c <= 1),
+            "{p}: {stdout}{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        let rep = &json["report"];
+        assert_eq!(rep["anchor"], "first spindle start", "{p}: {stdout}");
+        let off = rep["offset_us"].as_i64().unwrap();
+        assert!((off - by_hand).abs() <= 2000, "{p}: offset {off} µs, by hand {by_hand} µs");
+        assert!(!rep["divergences"].as_array().unwrap().iter().any(|d| d["check"] == "CHK-ALIGN-01"), "{p}");
+        assert!(rep["figures"]["fit_rms_mm"].as_f64().is_some(), "{p}: the fit is reported");
+        assert!(stdout.contains("fit positions rms"), "{p}: {stdout}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -103,7 +103,9 @@ impl Carried {
     ///    `F76.3` rise, else the first `RGTAP` rise (declared by the recording);
     /// 3. the first cycle start (`STL` rise; SHDR: `execution` going `ACTIVE`);
     /// 4. the first motion of the tap axis (when the recording records it);
-    /// 5. none: offset 0.
+    /// 5. the first spindle start (when it records the spindle speed and the reference turns it);
+    /// 6. the first motion of the axis that moves first in the reference (a recorded one);
+    /// 7. none: offset 0.
     pub fn default_anchor(&self, reference: &Trace, tap_slot: Option<usize>) -> Anchor {
         let m29 = reference.functions().any(|(_, l, c)| l == 'M' && c == 29);
         let rises = |s: Signal| self.declares(s) && reference.edges(s).any(|(_, v)| v);
@@ -121,6 +123,16 @@ impl Carried {
             return Anchor::Edge(Signal::Stl, true);
         }
         if tap_slot.is_some_and(|s| self.axis(s)) {
+            return Anchor::TapMotion;
+        }
+        if self.rpm && reference.samples().any(|(_, s)| s.spindle_mrpm != 0) {
+            return Anchor::SpindleStart;
+        }
+        let moves = |slot: usize| {
+            let mut v = reference.samples().map(|(_, s)| s.axes[slot]);
+            v.next().is_some_and(|first| v.any(|x| x != first))
+        };
+        if reference.meta.axes.iter().any(|a| self.axis(a.index) && moves(a.index)) {
             return Anchor::TapMotion;
         }
         Anchor::Offset(0)

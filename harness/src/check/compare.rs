@@ -9,7 +9,7 @@ use nc_engine::trace::{EndSummary, Event, Sample, Signal, Signals, Trace, TraceE
 use super::carried::{Carried, NotComparable};
 use super::events::{Finding, Key, Matcher};
 use super::keypoints::KeyTracker;
-use super::reference::{MotionDetector, Reference};
+use super::reference::{MotionDetector, Reference, Watch};
 use super::tolerance::{attribute, mm_nm, ms_us, Anchor, Context, Tolerances, Topic};
 use super::{Divergence, Point, MAX_DIVERGENCES};
 use crate::scenario::timeline::{fixed, ms};
@@ -65,6 +65,10 @@ pub struct Comparator<'r> {
     cur_sync: Option<f64>,
     /// Recorded samples at which the synchronisation was compared.
     pub sync_samples: u64,
+    /// How well the alignment fits: the sum of squared position differences (recorded −
+    /// reference at the same time, nm²) over the recorded axes and samples within the reference's
+    /// run, and their number.
+    pub fit: (f64, u64),
     sync_run: Option<Run>,
     env_runs: Vec<Option<Run>>,
     /// Divergences so far.
@@ -118,13 +122,20 @@ impl<'r> Comparator<'r> {
     /// A comparator against `r`.
     pub fn new(r: &'r Reference<'r>, tol: Tolerances, anchor: Anchor, scenario_rules: Vec<String>) -> Self {
         let threshold = mm_nm(tol.position_mm);
-        let motion = match anchor {
-            Anchor::TapMotion => r.tap.map(|tp| MotionDetector::new(tp.slot, threshold)),
+        let rpm_threshold = (tol.speed_rpm.max(0.001) * 1000.0).round() as i64;
+        let watch = match anchor {
+            Anchor::TapMotion => r
+                .tap
+                .map(|tp| tp.slot)
+                .or_else(|| r.first_moving_axis(threshold, |_| true))
+                .map(|slot| (Watch::Axis(slot), threshold)),
+            Anchor::SpindleStart => Some((Watch::Spindle, rpm_threshold)),
             _ => None,
         };
+        let motion = watch.map(|(w, th)| MotionDetector::watching(w, th));
         let ref_anchor = match &anchor {
             Anchor::Offset(_) => None,
-            Anchor::TapMotion => r.tap.and_then(|tp| r.first_motion(tp.slot, threshold)),
+            Anchor::TapMotion | Anchor::SpindleStart => watch.and_then(|(w, th)| r.first_change(w, th)),
             a => r.trace.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
         };
         let offset = match anchor {
@@ -150,6 +161,7 @@ impl<'r> Comparator<'r> {
             sync_win: None,
             cur_sync: None,
             sync_samples: 0,
+            fit: (0.0, 0),
             sync_run: None,
             env_runs: vec![None; r.axes().len()],
             divergences: Vec::new(),
@@ -557,6 +569,12 @@ impl<'r> Comparator<'r> {
             }
             let Some((lo, hi)) = self.r.range(t - w, t + w, a.index) else { continue };
             let v = s.axes[a.index] as f64;
+            if t <= r.end_us && !a.rotary {
+                if let Some(p) = r.pos_at(t, a.index) {
+                    self.fit.0 += (v - p) * (v - p);
+                    self.fit.1 += 1;
+                }
+            }
             let excess = (lo - tol - v).max(v - hi - tol);
             if excess > 0.0 {
                 self.max_env_nm = self.max_env_nm.max(excess);

@@ -103,6 +103,12 @@ pub struct Figures {
     pub max_envelope_excess_mm: f64,
     /// Pecks (cuts) in the reference / recorded.
     pub pecks: (usize, usize),
+    /// How well the alignment fits: the root mean square of recorded − reference positions at
+    /// the same time over every recorded axis and sample within the reference's run, mm (None:
+    /// no position compared).
+    pub fit_rms_mm: Option<f64>,
+    /// Position values in that figure.
+    pub fit_values: u64,
 }
 
 /// The outcome of a comparison.
@@ -212,6 +218,8 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
         sync_samples: c.sync_samples,
         max_envelope_excess_mm: c.max_env_nm / 1e6,
         pecks: (r.keys.pecks().len(), keys.pecks().len()),
+        fit_rms_mm: (c.fit.1 > 0).then(|| (c.fit.0 / c.fit.1 as f64).sqrt() / 1e6),
+        fit_values: c.fit.1,
     };
     Report {
         divergences: std::mem::take(&mut c.divergences),

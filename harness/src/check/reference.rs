@@ -56,12 +56,21 @@ pub fn unwrap_delta(a0: i64, m0: i64, a1: i64, m1: i64, dt_us: i64) -> f64 {
     expected + diff
 }
 
-/// Finds the first motion of one axis in a stream of samples: the time it first strays more
-/// than a threshold from where it stood at the first sample, interpolated between the two
-/// samples around the crossing.
+/// What a [`MotionDetector`] watches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Watch {
+    /// An axis' position (slot).
+    Axis(usize),
+    /// The spindle's speed (its magnitude).
+    Spindle,
+}
+
+/// Finds the first motion of one axis (or the first start of the spindle) in a stream of
+/// samples: the time it first strays more than a threshold from where it stood at the first
+/// sample, interpolated between the two samples around the crossing.
 #[derive(Debug, Clone, Copy)]
 pub struct MotionDetector {
-    slot: usize,
+    watch: Watch,
     threshold_nm: i64,
     start: Option<i64>,
     prev: Option<(i64, i64)>,
@@ -70,13 +79,21 @@ pub struct MotionDetector {
 impl MotionDetector {
     /// A detector for axis `slot` (threshold at least 1 nm).
     pub fn new(slot: usize, threshold_nm: i64) -> MotionDetector {
-        MotionDetector { slot, threshold_nm: threshold_nm.max(1), start: None, prev: None }
+        MotionDetector::watching(Watch::Axis(slot), threshold_nm)
+    }
+
+    /// A detector for `watch` (threshold at least 1 unit: nm, milli-rpm).
+    pub fn watching(watch: Watch, threshold: i64) -> MotionDetector {
+        MotionDetector { watch, threshold_nm: threshold.max(1), start: None, prev: None }
     }
 
     /// One sample at `t`; the time of the crossing once it is found (then every later call
     /// finds it again from the new sample: call it until the first `Some`).
     pub fn sample(&mut self, t: i64, s: &Sample) -> Option<i64> {
-        let p = s.axes[self.slot];
+        let p = match self.watch {
+            Watch::Axis(slot) => s.axes[slot],
+            Watch::Spindle => s.spindle_mrpm.abs(),
+        };
         let p0 = *self.start.get_or_insert(p);
         let prev = self.prev.replace((t, p));
         let dev = p - p0;
@@ -93,8 +110,23 @@ impl MotionDetector {
 impl<'a> Reference<'a> {
     /// The first motion of axis `slot` (see [`MotionDetector`]).
     pub fn first_motion(&self, slot: usize, threshold_nm: i64) -> Option<i64> {
-        let mut d = MotionDetector::new(slot, threshold_nm);
+        self.first_change(Watch::Axis(slot), threshold_nm)
+    }
+
+    /// The first change of what `watch` watches beyond `threshold` (see [`MotionDetector`]).
+    pub fn first_change(&self, watch: Watch, threshold: i64) -> Option<i64> {
+        let mut d = MotionDetector::watching(watch, threshold);
         self.t.iter().zip(&self.s).find_map(|(&t, s)| d.sample(t, s))
+    }
+
+    /// The axis (among those `carried` accepts) that moves first in the reference.
+    pub fn first_moving_axis(&self, threshold_nm: i64, carried: impl Fn(usize) -> bool) -> Option<usize> {
+        self.axes()
+            .iter()
+            .filter(|a| carried(a.index))
+            .filter_map(|a| self.first_motion(a.index, threshold_nm).map(|t| (t, a.index)))
+            .min()
+            .map(|x| x.1)
     }
 
     /// Indexes `trace`.

@@ -31,9 +31,13 @@ pub fn summary(rep: &Report, reference: &Trace, title: &str) -> String {
     let _ = writeln!(s, "{title}");
     let _ = writeln!(
         s,
-        "aligned on the {} (reference = recorded {:+} µs); {} recorded events, {} samples; {}/{} reference events matched; max sync error {}; pecks {} reference, {} recorded",
+        "aligned on the {} (reference = recorded {:+} µs; fit {}); {} recorded events, {} samples; {}/{} reference events matched; max sync error {}; pecks {} reference, {} recorded",
         rep.anchor,
         rep.offset_us,
+        match f.fit_rms_mm {
+            Some(rms) => format!("positions rms {} mm over {} values", fixed((rms * 1e6).round() as i64, 6), f.fit_values),
+            None => "n/a: no position compared".into(),
+        },
         f.recorded_events,
         f.recorded_samples,
         f.matched_events,

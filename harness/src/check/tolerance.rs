@@ -79,9 +79,12 @@ pub enum Anchor {
     Edge(Signal, bool),
     /// An explicit offset: reference time = recorded time + offset.
     Offset(i64),
-    /// The first motion of the tap axis (beyond `position_mm` from where it stood): for a
-    /// recording that carries neither functions nor the cycle-start and rigid-tapping signals.
+    /// The first motion of the tap axis (beyond `position_mm` from where it stood; without a
+    /// tap, of the axis that moves first in the reference): for a recording that carries neither
+    /// functions nor the cycle-start and rigid-tapping signals.
     TapMotion,
+    /// The first start of the spindle (its speed beyond `speed_rpm` from where it stood).
+    SpindleStart,
 }
 
 impl Anchor {
@@ -90,6 +93,9 @@ impl Anchor {
     pub fn parse(s: &str) -> Option<Anchor> {
         if s.eq_ignore_ascii_case("motion") {
             return Some(Anchor::TapMotion);
+        }
+        if s.eq_ignore_ascii_case("spindle") {
+            return Some(Anchor::SpindleStart);
         }
         if let Some(v) = s.strip_prefix("offset:") {
             return v.trim().parse().ok().map(Anchor::Offset);
@@ -113,7 +119,8 @@ impl Anchor {
             Anchor::Function(l, c) => format!("first {l}{c}"),
             Anchor::Edge(s, v) => format!("first {} = {}", s.name(), *v as u8),
             Anchor::Offset(o) => format!("offset {o} µs"),
-            Anchor::TapMotion => "first motion of the tap axis".into(),
+            Anchor::TapMotion => "first motion of the tap axis (else the first axis to move)".into(),
+            Anchor::SpindleStart => "first spindle start".into(),
         }
     }
 }
@@ -347,6 +354,7 @@ mod tests {
         assert_eq!(Anchor::parse("RGTAP:0"), Some(Anchor::Edge(Signal::Rgtap, false)));
         assert_eq!(Anchor::parse("offset:-15"), Some(Anchor::Offset(-15)));
         assert_eq!(Anchor::parse("motion"), Some(Anchor::TapMotion));
+        assert_eq!(Anchor::parse("spindle"), Some(Anchor::SpindleStart));
         assert_eq!(Anchor::parse("bogus"), None);
         assert_eq!(Anchor::parse(""), None);
     }
