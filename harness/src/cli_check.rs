@@ -52,7 +52,8 @@ pub struct CheckArgs {
     pub lenient: bool,
 
     /// The event both time bases are tied at: `M29` (default), `STL` (the first cycle start),
-    /// any signal `NAME[:0|1]` or function `M.../S.../T...`.
+    /// any signal `NAME[:0|1]` or function `M.../S.../T...`, `motion` (the first motion of the
+    /// tap axis, else of the first axis to move), `spindle` (the first spindle start).
     #[arg(long, value_name = "EVENT", conflicts_with = "offset_us")]
     pub anchor: Option<String>,
 
@@ -152,7 +153,9 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         (_, Some(o)) => Some(Anchor::Offset(o)),
         (Some(a), None) => Some(Anchor::parse(a).ok_or_else(|| {
             let mut e = InputError::new("--anchor", format!("unknown anchor `{a}`"));
-            e.expected = Some("M29, STL, a signal NAME[:0|1], a function M../S../T.., offset:N".into());
+            e.expected = Some(
+                "M29, STL, a signal NAME[:0|1], a function M../S../T.., motion, spindle, offset:N".into(),
+            );
             e
         })?),
         (None, None) => None,
