@@ -68,6 +68,9 @@ pub enum Command {
     /// Exits 0 when every scenario run passed (skipped ones aside), 1 when one failed, 2 for errors
     /// in the input (command line, scenario files, an adapter that cannot be started).
     Conform(crate::cli_conform::ConformArgs),
+    /// Estimate a machine's timing (axis rates and time constants, spindle ramp, PLC answer
+    /// delays) from a recording of a known-good run; write a parameter file (docs/checking.md).
+    Calibrate(crate::cli_check::CalibrateArgs),
     /// Serve the reference engine over the adapter protocol on stdin/stdout (for adapters that
     /// delegate to it, and for tests).
     #[command(hide = true)]
@@ -119,6 +122,7 @@ pub fn main() -> ExitCode {
         Command::Campaign(args) => ExitCode::from(crate::cli_campaign::run(&args)),
         Command::Check(args) => ExitCode::from(crate::cli_check::run(&args)),
         Command::Conform(args) => ExitCode::from(crate::cli_conform::run(&args)),
+        Command::Calibrate(args) => ExitCode::from(crate::cli_check::calibrate(&args)),
         Command::Serve => ExitCode::from(crate::cli_conform::serve()),
     }
 }

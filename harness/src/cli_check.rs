@@ -207,3 +207,82 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     }
     Ok(if rep.conformant() { EXIT_OK } else { EXIT_RUN_FAILED })
 }
+
+/// `nc-conform calibrate`: estimate a machine's timing from a recording of a known-good run.
+#[derive(Debug, clap::Args)]
+pub struct CalibrateArgs {
+    /// The G-code program the recording ran.
+    #[arg(value_name = "PROGRAM")]
+    pub input: PathBuf,
+
+    /// The recorded trace of a known-good run: JSON Lines, CSV (with --map), VCD or SHDR.
+    #[arg(long, value_name = "FILE")]
+    pub trace: PathBuf,
+
+    /// The dialect of the program.
+    #[arg(long, value_name = "DIALECT", value_parser = PossibleValuesParser::new(nc_engine::dialect_names()))]
+    pub dialect: String,
+
+    /// Base parameters (kept where nothing is estimated).
+    #[arg(long, value_name = "FILE.yaml")]
+    pub params: Option<PathBuf>,
+
+    /// Column map of a CSV recording (or of SHDR keys).
+    #[arg(long, value_name = "MAP.yaml")]
+    pub map: Option<PathBuf>,
+
+    /// The recording's format when the first bytes do not tell it.
+    #[arg(long, value_name = "FORMAT")]
+    pub format: Option<String>,
+
+    /// Leave out faulty rows instead of stopping.
+    #[arg(long)]
+    pub lenient: bool,
+
+    /// Write the parameter file here instead of standard output.
+    #[arg(long, value_name = "FILE.yaml")]
+    pub out: Option<PathBuf>,
+}
+
+/// Carries out `nc-conform calibrate`; returns the exit status (0, or 2 for an input error).
+pub fn calibrate(args: &CalibrateArgs) -> u8 {
+    let inner = || -> Result<(), InputError> {
+        let input_name = display_name(&args.input);
+        let mut machine = Machine::new(&args.dialect)
+            .ok_or_else(|| InputError::new("--dialect", format!("unknown dialect `{}`", args.dialect)))?;
+        if let Some(p) = &args.params {
+            let yaml = read(p)?;
+            params_yaml::apply(&yaml, &mut machine)
+                .map_err(|e| InputError::at(display_name(p), &yaml, e.span, e.message, e.expected))?;
+        }
+        let text = read(&args.input)?;
+        machine.parse(&text).map_err(|e| parse_error(&input_name, &text, &e))?;
+        let map = match &args.map {
+            Some(p) => Some(ColumnMap::load(p)?),
+            None => None,
+        };
+        let opts = import::Options {
+            format: args.format.as_deref().and_then(Format::from_name),
+            map: map.as_ref(),
+            lenient: args.lenient,
+        };
+        let importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
+        let axes = importer.meta().axes.clone();
+        let events: Vec<TraceEvent> = importer.collect::<Result<_, _>>().map_err(|e| import_error(&e))?;
+        let est = check::calibrate::estimate(&machine, &axes, &events);
+        let file = check::calibrate::params_file(&machine, &est, &display_name(&args.trace));
+        match &args.out {
+            Some(p) => std::fs::write(p, file)
+                .map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))?,
+            None => print!("{file}"),
+        }
+        Ok(())
+    };
+    match inner() {
+        Ok(()) => EXIT_OK,
+        Err(e) => {
+            e.report();
+            EXIT_INPUT
+        }
+    }
+}

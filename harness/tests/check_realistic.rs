@@ -306,3 +306,74 @@ fn real_linuxcnc_recordings_align_by_themselves() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Issue 14 §3: `calibrate` estimates a machine's timing from a recording of a known-good run;
+/// checking the same recording with the parameters it writes is conformant at tight tolerances
+/// (it is not with the defaults), and a recording with one defect still fails.
+#[test]
+fn calibrated_parameters_make_a_known_good_recording_conformant_at_tight_tolerances() {
+    use nc_conform::check::{calibrate, CheckSpec, Tolerances};
+    let program = "G98;\nG0 X100 Z60;\nM03 S800;\nG0 X20 Z2;\nM05;\nM29 S1000;\nG84 Z-5 F1;\nG80;\nG0 X100 Z60;\nM30;\n";
+    let truth = "params:\n  nc.rapid_mm_min: {X: 5000, Z: 7000}\n  nc.rapid_ramp_ms: {X: 80, Z: 120}\n  nc.spindle_ramp_ms: 1500\n  plc.fin_ms: 40\n  plc.fin_fall_ms: 12\n  plc.sppos_reach_ms: 90\n";
+    let mut machine = nc_engine::Machine::new("gsk-lathe").unwrap();
+    nc_conform::params_yaml::apply(truth, &mut machine).unwrap();
+    let prog = machine.parse(program).unwrap();
+    let opts = nc_engine::RunOptions { auto_cycle_start: true, ..Default::default() };
+    let good = machine.run_to_trace(&prog, &opts);
+    let recorded = record(&good, Rec::REALISTIC);
+
+    let base = nc_engine::Machine::new("gsk-lathe").unwrap();
+    let est = calibrate::estimate(&base, &good.meta.axes, &recorded);
+    let file = calibrate::params_file(&base, &est, "good.jsonl");
+    for id in
+        ["nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.spindle_ramp_ms", "plc.fin_ms", "plc.sppos_reach_ms"]
+    {
+        assert!(file.contains(id), "{id} estimated:\n{file}");
+    }
+    let got =
+        |id: &str, axis: Option<char>| est.iter().find(|e| e.id == id && e.axis == axis).map(|e| e.value);
+    for (id, axis, truth, within) in [
+        ("nc.rapid_mm_min", Some('X'), 5000.0, 10.0),
+        ("nc.rapid_mm_min", Some('Z'), 7000.0, 14.0),
+        ("nc.rapid_ramp_ms", Some('X'), 80.0, 3.0),
+        ("nc.rapid_ramp_ms", Some('Z'), 120.0, 3.0),
+        ("nc.spindle_ramp_ms", None, 1500.0, 15.0),
+        ("plc.fin_ms", None, 40.0, 1.0),
+        ("plc.sppos_reach_ms", None, 90.0, 1.0),
+    ] {
+        let v = got(id, axis).unwrap_or(f64::NAN);
+        eprintln!("{id} {axis:?}: {v} (truth {truth})");
+        assert!((v - truth).abs() <= within, "{id} {axis:?}: {v}, truth {truth}\n{file}");
+    }
+    let mut calibrated = nc_engine::Machine::new("gsk-lathe").unwrap();
+    nc_conform::params_yaml::apply(&file, &mut calibrated).unwrap_or_else(|e| panic!("{e:?}\n{file}"));
+
+    let tight = Tolerances {
+        event_ms: 5.0,
+        envelope_ms: 5.0,
+        position_mm: 0.02,
+        keypoint_mm: 0.01,
+        sync_mm: 0.01,
+        dwell_ms: 5.0,
+        ..Tolerances::default()
+    };
+    let spec = CheckSpec { tolerances: tight, ..Default::default() };
+    let reference_of = |m: &nc_engine::Machine| m.run_to_trace(&prog, &opts);
+    let cal_ref = reference_of(&calibrated);
+    let r = nc_conform::check::check(&cal_ref, recorded.clone(), &spec);
+    assert!(r.conformant(), "calibrated:\n{file}\n{}", show(&r, &cal_ref));
+    let default_ref = reference_of(&base);
+    let r = nc_conform::check::check(&default_ref, recorded.clone(), &spec);
+    assert!(!r.conformant(), "the defaults should not fit this machine");
+    // One defect: RGTAP answered 15 ms late.
+    let mut bad = good.clone();
+    let t = edge_time(&good, Signal::Rgtap, true, 0);
+    for e in &mut bad.events {
+        if e.t_us == t && matches!(e.event, Event::Signal { signal: Signal::Rgtap, value: true }) {
+            e.t_us += 15_000;
+        }
+    }
+    bad.events.sort_by_key(|e| e.t_us);
+    let r = nc_conform::check::check(&cal_ref, record(&bad, Rec::REALISTIC), &spec);
+    assert!(r.divergences.iter().any(|d| d.what.starts_with("RGTAP rises")), "{}", show(&r, &cal_ref));
+}

@@ -13,6 +13,7 @@
 //! The scenario's temporal rules run on a compact copy of the recorded trace through
 //! [`crate::scenario::expect::evaluate_discrete`].
 
+pub mod calibrate;
 pub mod carried;
 pub mod compare;
 pub mod events;
