@@ -377,3 +377,36 @@ fn calibrated_parameters_make_a_known_good_recording_conformant_at_tight_toleran
     let r = nc_conform::check::check(&cal_ref, record(&bad, Rec::REALISTIC), &spec);
     assert!(r.divergences.iter().any(|d| d.what.starts_with("RGTAP rises")), "{}", show(&r, &cal_ref));
 }
+
+/// Issue 14 §5: the JSON report lists divergences in time order, each margin also as a number
+/// with its unit; the JUnit report has `time` attributes.
+#[test]
+fn json_divergences_in_time_order_with_numeric_margins_and_junit_times() {
+    let s = scenario("scenarios/gsk/peck/high_speed_seed_example.yaml");
+    let reference = reference(&s);
+    let end = reference.events.last().unwrap().t_us;
+    let rec: Vec<TraceEvent> = record(&reference, Rec::PLC_SCAN)
+        .into_iter()
+        .filter(|e| e.t_us < Rec::PLC_SCAN.shift_us + end / 2)
+        .collect();
+    let mut t = reference.clone();
+    for e in &mut t.events {
+        if let Event::Sample(x) = &mut e.event {
+            x.axes[2] += 300_000; // Z 0.3 mm off everywhere
+        }
+    }
+    let mut all = record(&t, Rec::PLC_SCAN);
+    all.truncate(rec.len());
+    let r = check(&s, &reference, all);
+    assert!(r.divergences.len() >= 2, "{}", show(&r, &reference));
+    let json: serde_json::Value =
+        serde_json::from_str(&nc_conform::check::report::json(&r, "a", "b")).unwrap();
+    let ds = json["report"]["divergences"].as_array().unwrap();
+    let times: Vec<i64> = ds.iter().map(|d| d["t_us"].as_i64().unwrap_or(i64::MAX)).collect();
+    assert!(times.windows(2).all(|w| w[0] <= w[1]), "time order: {times:?}");
+    let env = ds.iter().find(|d| d["check"] == "CHK-ENV-01").expect("an envelope divergence");
+    assert!(env["margin_value"].as_f64().is_some_and(|v| v > 0.2), "{env}");
+    assert_eq!(env["margin_unit"], "mm");
+    let junit = nc_conform::check::report::junit(&r, "x");
+    assert!(junit.contains("<testsuite name=\"x\"") && junit.contains(" time=\""), "{junit}");
+}

@@ -115,7 +115,9 @@ pub struct Figures {
 /// The outcome of a comparison.
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
-    /// Every divergence, in the order found (see [`Report::sorted`]).
+    /// Every divergence, by time (those without a time last); in JSON each also has its margin
+    /// as a number with its unit (`margin_value`, `margin_unit`).
+    #[serde(serialize_with = "divergences_json")]
     pub divergences: Vec<Divergence>,
     /// Divergences beyond [`MAX_DIVERGENCES`], not listed.
     pub omitted: usize,
@@ -137,6 +139,32 @@ pub struct Report {
     /// Plot points of the recorded trace.
     #[serde(skip)]
     pub series: Vec<Point>,
+    /// Wall time of the comparison, s (JUnit `time`).
+    pub seconds: f64,
+}
+
+/// A margin's number and unit (`0.139809 mm`, `130 ms beyond the window`, `5 rpm`); None for
+/// `-`.
+pub fn margin_number(margin: &str) -> Option<(f64, &str)> {
+    let mut it = margin.split_whitespace();
+    let v: f64 = it.next()?.parse().ok()?;
+    Some((v, it.next().unwrap_or("")))
+}
+
+fn divergences_json<S: serde::Serializer>(ds: &[Divergence], s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct WithNumber<'a> {
+        #[serde(flatten)]
+        d: &'a Divergence,
+        margin_value: Option<f64>,
+        margin_unit: Option<&'a str>,
+    }
+    let mut v: Vec<&Divergence> = ds.iter().collect();
+    v.sort_by_key(|d| d.t_us.unwrap_or(i64::MAX));
+    s.collect_seq(v.into_iter().map(|d| {
+        let m = margin_number(&d.margin);
+        WithNumber { d, margin_value: m.map(|x| x.0), margin_unit: m.map(|x| x.1) }
+    }))
 }
 
 impl Report {
@@ -172,6 +200,7 @@ pub fn default_anchor(reference: &Trace) -> Anchor {
 
 /// Compares the recorded events (time as recorded, in order) with `reference`.
 pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, spec: &CheckSpec) -> Report {
+    let started = std::time::Instant::now();
     let r = reference::Reference::new(reference);
     let anchor =
         spec.anchor.clone().unwrap_or_else(|| spec.carried.default_anchor(reference, r.tap.map(|t| t.slot)));
@@ -233,6 +262,7 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
         figures: Figures { matched_events: c.matched(), ..figures },
         recorded: compact,
         series: std::mem::take(&mut c.series),
+        seconds: started.elapsed().as_secs_f64(),
     }
 }
 

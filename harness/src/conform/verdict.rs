@@ -52,12 +52,20 @@ pub struct ScenarioVerdict {
     pub failures: Vec<Failure>,
     /// Comparisons left out because the reference fails them against itself.
     pub notes: Vec<String>,
+    /// Wall time of the scenario (its reference run, the controller's run, the verdict), s.
+    pub seconds: f64,
 }
 
 impl ScenarioVerdict {
     /// Whether it failed.
     pub fn failed(&self) -> bool {
         self.status == Status::Failed
+    }
+
+    /// Whether it failed because the controller did (timeout, crash, protocol): a JUnit error,
+    /// not a failure.
+    pub fn errored(&self) -> bool {
+        self.failed() && self.failures.iter().all(|f| f.by == "controller")
     }
 
     /// Whether a failure names a rule of this family (`GSK-RT` matches `GSK-RT-07`).
@@ -85,6 +93,7 @@ impl ScenarioVerdict {
             status: Status::Failed,
             failures,
             notes: Vec::new(),
+            seconds: 0.0,
         }
     }
 }
@@ -103,6 +112,7 @@ pub fn judge(s: &Scenario, driven: &Driven, reference: &Trace, tolerances: &Tole
                 status: Status::Skipped(why.clone()),
                 failures,
                 notes: Vec::new(),
+                seconds: 0.0,
             }
         }
         (Driven::Refused { line, col, message }, Some((_, want, _))) => {
@@ -207,6 +217,7 @@ pub fn judge(s: &Scenario, driven: &Driven, reference: &Trace, tolerances: &Tole
         status,
         failures,
         notes,
+        seconds: 0.0,
     }
 }
 
