@@ -173,8 +173,12 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     let mut importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
     let carried = check::Carried::of(importer.meta());
     let mut failure: Option<ImportError> = None;
+    let mut progress = Progress::new(&display_name(&args.trace));
     let stream = std::iter::from_fn(|| match importer.next()? {
-        Ok(ev) => Some(ev),
+        Ok(ev) => {
+            progress.tick(ev.t_us);
+            Some(ev)
+        }
         Err(e) => {
             failure = Some(e);
             None
@@ -182,6 +186,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     });
     let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
     let rep = check::check(&reference, stream.map(|e: TraceEvent| e), &spec);
+    progress.done();
     if let Some(e) = failure {
         return Err(import_error(&e));
     }
@@ -283,6 +288,62 @@ pub fn calibrate(args: &CalibrateArgs) -> u8 {
         Err(e) => {
             e.report();
             EXIT_INPUT
+        }
+    }
+}
+
+/// A progress line on a terminal (standard error) for a check that takes more than 2 s: the
+/// events read, their rate and the recorded time reached. Nothing when standard error is not a
+/// terminal, or for a short check.
+struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    name: String,
+    started: std::time::Instant,
+    n: u64,
+    tty: bool,
+}
+
+impl Progress {
+    fn new(name: &str) -> Progress {
+        use std::io::IsTerminal;
+        Progress {
+            bar: None,
+            name: name.to_string(),
+            started: std::time::Instant::now(),
+            n: 0,
+            tty: std::io::stderr().is_terminal(),
+        }
+    }
+
+    fn tick(&mut self, t_us: u64) {
+        self.n += 1;
+        if !self.tty || !self.n.is_multiple_of(65_536) {
+            return;
+        }
+        let secs = self.started.elapsed().as_secs_f64();
+        if self.bar.is_none() && secs >= 2.0 {
+            let bar = indicatif::ProgressBar::new_spinner();
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{spinner} {elapsed_precise} {msg}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+            );
+            self.bar = Some(bar);
+        }
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!(
+                "checking {}: {} events, {:.2} M/s, recorded {:.1} s",
+                self.name,
+                self.n,
+                self.n as f64 / secs / 1e6,
+                t_us as f64 / 1e6
+            ));
+            bar.tick();
+        }
+    }
+
+    fn done(&mut self) {
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
         }
     }
 }
