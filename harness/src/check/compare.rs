@@ -563,17 +563,18 @@ impl<'r> Comparator<'r> {
         let tol = mm_nm(self.tol.position_mm) as f64;
         // `r` outlives `self`'s borrow: no copy of the axes per recorded sample.
         let r = self.r;
+        let Some((los, his)) = r.range_all(t - w, t + w) else { return };
+        let at = if t <= r.end_us { r.pos_all(t) } else { None };
         for (k, a) in r.axes().iter().enumerate() {
             if !self.carried.axis(a.index) {
                 continue;
             }
-            let Some((lo, hi)) = self.r.range(t - w, t + w, a.index) else { continue };
+            let (lo, hi) = (los[a.index], his[a.index]);
             let v = s.axes[a.index] as f64;
-            if t <= r.end_us && !a.rotary {
-                if let Some(p) = r.pos_at(t, a.index) {
-                    self.fit.0 += (v - p) * (v - p);
-                    self.fit.1 += 1;
-                }
+            if let (Some(p), false) = (at, a.rotary) {
+                let p = p[a.index];
+                self.fit.0 += (v - p) * (v - p);
+                self.fit.1 += 1;
             }
             let excess = (lo - tol - v).max(v - hi - tol);
             if excess > 0.0 {

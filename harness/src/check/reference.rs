@@ -247,6 +247,50 @@ impl<'a> Reference<'a> {
         Some((lo, hi))
     }
 
+    /// Every axis at `t`, interpolated (as [`Reference::pos_at`], in one search).
+    pub fn pos_all(&self, t: i64) -> Option<[f64; AXES]> {
+        let i = self.idx_at(t).or(if self.s.is_empty() { None } else { Some(0) })?;
+        let a = &self.s[i];
+        let mut out = [0.0; AXES];
+        match self.s.get(i + 1) {
+            Some(n) if self.t[i] <= t => {
+                let f = (t - self.t[i]) as f64 / (self.t[i + 1] - self.t[i]).max(1) as f64;
+                for (k, o) in out.iter_mut().enumerate() {
+                    let v0 = a.axes[k] as f64;
+                    *o = v0 + (n.axes[k] as f64 - v0) * f;
+                }
+            }
+            _ => {
+                for (k, o) in out.iter_mut().enumerate() {
+                    *o = a.axes[k] as f64;
+                }
+            }
+        }
+        Some(out)
+    }
+
+    /// The range (min, max) of every axis over [t0, t1], ends interpolated (as
+    /// [`Reference::range`], in one pass).
+    pub fn range_all(&self, t0: i64, t1: i64) -> Option<([f64; AXES], [f64; AXES])> {
+        let a = self.pos_all(t0)?;
+        let b = self.pos_all(t1)?;
+        let (mut lo, mut hi) = ([0.0; AXES], [0.0; AXES]);
+        for k in 0..AXES {
+            lo[k] = a[k].min(b[k]);
+            hi[k] = a[k].max(b[k]);
+        }
+        let i0 = self.t.partition_point(|&x| x < t0);
+        let i1 = self.t.partition_point(|&x| x <= t1);
+        for s in &self.s[i0..i1.max(i0)] {
+            for k in 0..AXES {
+                let v = s.axes[k] as f64;
+                lo[k] = lo[k].min(v);
+                hi[k] = hi[k].max(v);
+            }
+        }
+        Some((lo, hi))
+    }
+
     /// The phase in force at `t`.
     pub fn phase_at(&self, t: i64) -> Phase {
         let k = self.phases.partition_point(|p| p.0 <= t);

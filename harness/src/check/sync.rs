@@ -219,16 +219,32 @@ pub fn error_at(
     }
     let i0 = r.t.partition_point(|&x| x < lo);
     let i1 = r.t.partition_point(|&x| x <= hi);
-    let mut best: Option<(i64, usize, f64)> = None;
-    for i in i0..i1.saturating_sub(1) {
+    // Segments outward from the one at `t`; the crossing nearest in time wins (both sides of a
+    // ring are looked at before stopping).
+    let seg = |i: usize| -> Option<(i64, usize, f64)> {
         let (a, b) = (r.s[i].axes[w.slot], r.s[i + 1].axes[w.slot]);
         if (a - pos).signum() * (b - pos).signum() > 0 || (b - a).abs() < 100 {
-            continue;
+            return None;
         }
         let f = (pos - a) as f64 / (b - a) as f64;
-        let tc = r.t[i] + (f * (r.t[i + 1] - r.t[i]) as f64) as i64;
-        if best.is_none_or(|(bt, _, _)| (tc - t).abs() < (bt - t).abs()) {
-            best = Some((tc, i, f));
+        Some((r.t[i] + (f * (r.t[i + 1] - r.t[i]) as f64) as i64, i, f))
+    };
+    let last = i1.saturating_sub(1);
+    let mid = r.t.partition_point(|&x| x <= t).saturating_sub(1).clamp(i0, last.max(i0));
+    let mut best: Option<(i64, usize, f64)> = None;
+    for d in 0..=(last.saturating_sub(i0)) {
+        for i in [mid.checked_add(d), mid.checked_sub(d + 1)].into_iter().flatten() {
+            if i < i0 || i >= last {
+                continue;
+            }
+            if let Some(c) = seg(i) {
+                if best.is_none_or(|(bt, _, _)| (c.0 - t).abs() < (bt - t).abs()) {
+                    best = Some(c);
+                }
+            }
+        }
+        if best.is_some() {
+            break;
         }
     }
     let (_, i, f) = best?;
