@@ -44,6 +44,9 @@ pub struct Reference<'a> {
     pub cum_mdeg: Vec<f64>,
     /// The synchronised moves (rigid strokes, thread passes, encoder-following moves).
     pub sync: Vec<super::sync::Window>,
+    /// The sample index of the last lookup: recorded times mostly grow, so the next lookup
+    /// starts there.
+    hint: std::cell::Cell<usize>,
 }
 
 /// The change of a spindle angle from `a0` to `a1` (milli-degrees) over `dt_us`, unwrapped using
@@ -164,6 +167,7 @@ impl<'a> Reference<'a> {
             inputs,
             cum_mdeg,
             sync: Vec::new(),
+            hint: std::cell::Cell::new(0),
         };
         r.sync = super::sync::windows(&r);
         r
@@ -197,8 +201,17 @@ impl<'a> Reference<'a> {
 
     /// The index of the last sample at or before `t` (None before the first).
     fn idx_at(&self, t: i64) -> Option<usize> {
-        let k = self.t.partition_point(|&x| x <= t);
-        k.checked_sub(1)
+        let h = self.hint.get();
+        // The sample at or before `t`: the hint, or one of the next two, else a binary search.
+        for k in h..(h + 3).min(self.t.len()) {
+            if self.t[k] <= t && self.t.get(k + 1).is_none_or(|&n| n > t) {
+                self.hint.set(k);
+                return Some(k);
+            }
+        }
+        let k = self.t.partition_point(|&x| x <= t).checked_sub(1)?;
+        self.hint.set(k);
+        Some(k)
     }
 
     /// A value read from samples, interpolated linearly at `t` (held after the last sample).

@@ -63,6 +63,8 @@ pub struct Window {
     pub n: usize,
     /// The G code of the block it belongs to (None: a rigid stroke, a Klartext cycle).
     pub code: Option<&'static str>,
+    /// The reference's position of its axis at its start and end, nm.
+    pub ends: [f64; 2],
 }
 
 /// The G codes of a dialect that lock the feed to the spindle: (threads, followers, the ones
@@ -189,7 +191,8 @@ pub fn windows(r: &Reference) -> Vec<Window> {
         let div = if r.axes().iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
         let k = kind as usize;
         counts[k] += 1;
-        out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k], code });
+        let ends = [r.pos_at(t0, slot).unwrap_or(0.0), r.pos_at(t1, slot).unwrap_or(0.0)];
+        out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k], code, ends });
     }
     out
 }
@@ -213,8 +216,7 @@ pub fn error_at(
     if lo >= hi {
         return None;
     }
-    let ends = [r.pos_at(w.t0, w.slot)?, r.pos_at(w.t1, w.slot)?];
-    if ends.iter().any(|&e| (pos as f64 - e).abs() <= still_nm as f64) {
+    if w.ends.iter().any(|&e| (pos as f64 - e).abs() <= still_nm as f64) {
         return None;
     }
     let i0 = r.t.partition_point(|&x| x < lo);
