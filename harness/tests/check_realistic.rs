@@ -114,6 +114,8 @@ fn a_lead_error_of_three_per_mille_is_caught_in_every_synchronised_move() {
         ("scenarios/linuxcnc/g331/g33.yaml", "LCNC-G33-01"),
         ("scenarios/linuxcnc/g76/passes.yaml", "LCNC-G76-01"),
         ("scenarios/knd/g93/standard.yaml", "KND-G93-03"),
+        ("scenarios/knd/lex/threading.yaml", "KND-LEX-08"),
+        ("scenarios/knd/css/taper_thread.yaml", "KND-LEX-08"),
         ("scenarios/gsk/peck/standard_seed_example.yaml", "COM-SYNC-01"),
     ] {
         let s = scenario(rel);

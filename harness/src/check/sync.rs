@@ -116,6 +116,59 @@ fn motion_code(text: &str, lathe: bool) -> Option<String> {
     out
 }
 
+/// The value of the first word `letter` in a block's text (comments out).
+fn word(text: &str, letter: char) -> Option<f64> {
+    let up = text.to_ascii_uppercase();
+    let up = up.split(';').next().unwrap_or("");
+    let mut depth = 0;
+    let b = up.as_bytes();
+    for (i, &c) in b.iter().enumerate() {
+        match c {
+            b'(' => depth += 1,
+            b')' => depth -= 1,
+            c if depth == 0 && c == letter as u8 => {
+                let j = (i + 1..b.len())
+                    .find(|&k| !(b[k].is_ascii_digit() || b[k] == b'.' || b[k] == b'-'))
+                    .unwrap_or(b.len());
+                return up[i + 1..j].parse().ok();
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// The parts of [t0, t1] where the reference's furthest-travelling axis advances `lead_mm` per
+/// spindle revolution (within 3 %, the axis moving): a thread block's synchronised moves when the
+/// reference marks no phases in it (the rapids in and back are left out).
+fn by_lead(r: &Reference, t0: i64, t1: i64, lead_mm: f64) -> Vec<(i64, i64)> {
+    let Some(slot) = r.furthest_axis(t0, t1) else { return Vec::new() };
+    let div = if r.axes().iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
+    let want = lead_mm * 1e6;
+    let i0 = r.t.partition_point(|&x| x < t0);
+    let i1 = r.t.partition_point(|&x| x <= t1);
+    let mut out: Vec<(i64, i64)> = Vec::new();
+    let mut from: Option<i64> = None;
+    for i in i0..i1.saturating_sub(1) {
+        let dp = (r.s[i + 1].axes[slot] - r.s[i].axes[slot]).abs() as f64 / div;
+        let dr = (r.cum_mdeg[i + 1] - r.cum_mdeg[i]).abs() / 360_000.0;
+        let locked = dp > 100.0 && dr > 1e-6 && ((dp / dr) - want).abs() <= 0.03 * want;
+        match (locked, from) {
+            (true, None) => from = Some(r.t[i]),
+            (false, Some(a)) => {
+                out.push((a, r.t[i]));
+                from = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = from {
+        out.push((a, r.t[i1.saturating_sub(1).max(i0)]));
+    }
+    out.retain(|w| w.1 - w.0 >= 20_000);
+    out
+}
+
 /// The synchronised moves of `r`, in time order.
 pub fn windows(r: &Reference) -> Vec<Window> {
     let trace: &Trace = r.trace;
@@ -128,6 +181,9 @@ pub fn windows(r: &Reference) -> Vec<Window> {
     let mut stroke_from: Option<i64> = None;
     let mut code: Option<String> = None;
     let mut open: Option<(i64, Kind, bool, Option<&'static str>)> = None;
+    let mut block: Option<(i64, &'static str, f64)> = None;
+    let mut phased = false;
+    let mut feed: Option<f64> = None;
     for e in &trace.events {
         let t = e.t_us as i64;
         match &e.event {
@@ -144,11 +200,29 @@ pub fn windows(r: &Reference) -> Vec<Window> {
                 }
             }
             Event::Block { text, .. } => {
+                // A thread block that ran without phase events (KND G32/G92): its synchronised
+                // parts are found by their lead.
+                if let Some((b0, g, f)) = block.take() {
+                    if !phased {
+                        raw.extend(
+                            by_lead(r, b0, t, f)
+                                .into_iter()
+                                .map(|(a, b)| (a, b, Kind::Thread, false, Some(g))),
+                        );
+                    }
+                }
                 if let Some(c) = motion_code(text, lathe) {
                     code = Some(c);
                 }
+                if let Some(v) = word(text, 'F') {
+                    feed = Some(v);
+                }
+                let c = code.as_deref().unwrap_or("");
+                block = threads.iter().find(|x| **x == c).zip(feed).map(|(g, f)| (t, *g, f));
+                phased = false;
             }
             Event::Phase(p) => {
+                phased = true;
                 if let Some((a, k, l, g)) = open.take() {
                     raw.push((a, t, k, l, g));
                 }
@@ -170,6 +244,11 @@ pub fn windows(r: &Reference) -> Vec<Window> {
     }
     if let Some((a, k, l, g)) = open {
         raw.push((a, r.end_us, k, l, g));
+    }
+    if let Some((b0, g, f)) = block.filter(|_| !phased) {
+        raw.extend(
+            by_lead(r, b0, r.end_us, f).into_iter().map(|(a, b)| (a, b, Kind::Thread, false, Some(g))),
+        );
     }
     if let Some(a) = stroke_from {
         raw.push((a, r.end_us, Kind::Stroke, false, None));
