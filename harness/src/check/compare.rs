@@ -233,6 +233,7 @@ impl<'r> Comparator<'r> {
                 .r
                 .sync_index(t)
                 .and_then(|k| super::tolerance::sync_rule(&self.dialect, self.r.sync[k].code)),
+            in_sync: self.r.sync_index(t).is_some(),
         }
     }
 

@@ -165,6 +165,8 @@ pub struct Context {
     pub phase: Option<Phase>,
     /// The rule of the synchronised move the reference is in then (`sync_rule`).
     pub sync_rule: Option<&'static str>,
+    /// The reference is in a synchronised move then (a rigid stroke, a thread pass, ...).
+    pub in_sync: bool,
 }
 
 /// The M codes that are not spindle clamp codes.
@@ -322,10 +324,23 @@ pub fn attribute(topic: Topic, ctx: &Context) -> String {
         Topic::Pecks | Topic::Reversals => cands.extend(d.pecks),
         Topic::Bottom => cands.extend(d.bottom),
         Topic::Dwell => cands.extend(d.dwell),
-        Topic::Sync | Topic::Envelope => {
+        Topic::Sync => {
             cands.extend(ctx.sync_rule);
             cands.push("COM-SYNC-01");
         }
+        Topic::Envelope if ctx.in_sync || ctx.phase.is_none() => {
+            cands.extend(ctx.sync_rule);
+            cands.push("COM-SYNC-01");
+        }
+        // A position off outside any synchronised move: the motion's own rule.
+        Topic::Envelope => match (ctx.dialect.as_str(), ctx.phase) {
+            ("linuxcnc", Some(Phase::Cutting | Phase::Dwell | Phase::Retract | Phase::Positioning)) => {
+                cands.extend(["LCNC-CYC-03", "LCNC-MOD-02"])
+            }
+            ("linuxcnc", _) => cands.push("LCNC-MOD-02"),
+            (_, Some(Phase::Cutting | Phase::Dwell)) => cands.push("COM-MOT-02"),
+            _ => cands.push("COM-MOT-01"),
+        },
         Topic::End => {
             if has("reset") {
                 cands.extend(d.reset);
