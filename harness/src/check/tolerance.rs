@@ -427,5 +427,13 @@ mod tests {
             ..Context::default()
         };
         assert_eq!(attribute(Topic::Sync, &lc), "LCNC-G76-01");
+        // A position off outside any synchronised move is the motion's, not COM-SYNC-01.
+        let drill =
+            Context { dialect: "linuxcnc".into(), phase: Some(Phase::Positioning), ..Context::default() };
+        assert_eq!(attribute(Topic::Envelope, &drill), "LCNC-CYC-03");
+        let rapid = Context { dialect: "gsk-lathe".into(), phase: Some(Phase::Idle), ..Context::default() };
+        assert_eq!(attribute(Topic::Envelope, &rapid), "COM-MOT-01");
+        let stroke = Context { in_sync: true, ..rapid };
+        assert_eq!(attribute(Topic::Envelope, &stroke), "COM-SYNC-01");
     }
 }
