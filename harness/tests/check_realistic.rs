@@ -412,3 +412,35 @@ fn json_divergences_in_time_order_with_numeric_margins_and_junit_times() {
     let junit = nc_conform::check::report::junit(&r, "x");
     assert!(junit.contains("<testsuite name=\"x\"") && junit.contains(" time=\""), "{junit}");
 }
+
+/// Issue 14 §4: the report is bounded per kind: a chattering signal (thousands of extra edges)
+/// lists its first 1000 and counts the rest, and a divergence of another kind after them is
+/// still listed.
+#[test]
+fn the_report_is_bounded_per_kind_and_keeps_the_others() {
+    let s = scenario("scenarios/common/doc_examples/quick_start.yaml");
+    let reference = reference(&s);
+    let mut t = reference.clone();
+    let end = reference.events.last().unwrap().t_us;
+    let mut chatter = Vec::new();
+    for k in 0..3000u64 {
+        let at = 1000 + k * (end / 4000);
+        chatter.push(TraceEvent { t_us: at, event: Event::Signal { signal: Signal::Esp, value: true } });
+        chatter
+            .push(TraceEvent { t_us: at + 10, event: Event::Signal { signal: Signal::Esp, value: false } });
+    }
+    insert(&mut t, chatter);
+    let rise = edge_time(&reference, Signal::Rgspp, true, 0);
+    for e in &mut t.events {
+        if e.t_us == rise && matches!(e.event, Event::Signal { signal: Signal::Rgspp, value: true }) {
+            e.t_us += 100_000;
+        }
+    }
+    t.events.sort_by_key(|e| e.t_us);
+    let r = check(&s, &reference, record(&t, Rec::EXACT));
+    let extras = r.divergences.iter().filter(|d| d.check == "CHK-EVT-03").count();
+    assert_eq!(extras, nc_conform::check::MAX_PER_CHECK);
+    assert_eq!(r.omitted_by_check.get("CHK-EVT-03"), Some(&(6000 - nc_conform::check::MAX_PER_CHECK)));
+    assert!(r.divergences.iter().any(|d| d.what == "RGSPP rises 100 ms late"), "the other kind is listed");
+    assert!(show(&r, &reference).contains("CHK-EVT-03: 5000"));
+}

@@ -75,6 +75,9 @@ pub struct Comparator<'r> {
     pub divergences: Vec<Divergence>,
     /// Divergences left out past [`MAX_DIVERGENCES`].
     pub omitted: usize,
+    /// Of those, how many of each check.
+    pub omitted_by_check: std::collections::BTreeMap<String, usize>,
+    per_check: std::collections::BTreeMap<String, usize>,
     compact: Vec<TraceEvent>,
     had_phases: bool,
     had_blocks: bool,
@@ -166,6 +169,8 @@ impl<'r> Comparator<'r> {
             env_runs: vec![None; r.axes().len()],
             divergences: Vec::new(),
             omitted: 0,
+            omitted_by_check: Default::default(),
+            per_check: Default::default(),
             compact: Vec::new(),
             had_phases: false,
             had_blocks: false,
@@ -239,10 +244,13 @@ impl<'r> Comparator<'r> {
 
     /// Adds a divergence (the first [`MAX_DIVERGENCES`] are kept).
     pub fn push(&mut self, d: Divergence) {
-        if self.divergences.len() < MAX_DIVERGENCES {
+        let n = self.per_check.entry(d.check.clone()).or_insert(0);
+        *n += 1;
+        if self.divergences.len() < MAX_DIVERGENCES && *n <= super::MAX_PER_CHECK {
             self.divergences.push(d);
         } else {
             self.omitted += 1;
+            *self.omitted_by_check.entry(d.check).or_insert(0) += 1;
         }
     }
 

@@ -37,6 +37,11 @@ pub use tolerance::{Anchor, Tolerances};
 /// Most divergences listed one by one (the rest are counted).
 pub const MAX_DIVERGENCES: usize = 10_000;
 
+/// Most divergences of one check (`CHK-ENV-01`, ...) listed one by one: the first ones, the rest
+/// counted per check (`omitted_by_check`), so that one kind repeated over a long recording does
+/// not hide the others.
+pub const MAX_PER_CHECK: usize = 1_000;
+
 /// One way the recorded trace differs from the reference beyond tolerance.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Divergence {
@@ -119,8 +124,10 @@ pub struct Report {
     /// as a number with its unit (`margin_value`, `margin_unit`).
     #[serde(serialize_with = "divergences_json")]
     pub divergences: Vec<Divergence>,
-    /// Divergences beyond [`MAX_DIVERGENCES`], not listed.
+    /// Divergences beyond [`MAX_DIVERGENCES`] or [`MAX_PER_CHECK`], not listed.
     pub omitted: usize,
+    /// Of those, how many of each check.
+    pub omitted_by_check: std::collections::BTreeMap<String, usize>,
     /// The scenario's temporal rules on the recorded trace.
     pub rules: Vec<Verdict>,
     /// The anchor used.
@@ -254,6 +261,7 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
     Report {
         divergences: std::mem::take(&mut c.divergences),
         omitted: c.omitted,
+        omitted_by_check: std::mem::take(&mut c.omitted_by_check),
         rules,
         anchor: if c.anchored { anchor.describe() } else { format!("{} (not found)", anchor.describe()) },
         offset_us: c.offset(),

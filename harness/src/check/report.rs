@@ -76,7 +76,8 @@ pub fn summary(rep: &Report, reference: &Trace, title: &str) -> String {
         );
     }
     if rep.omitted > 0 {
-        let _ = writeln!(s, "  ... and {} more", rep.omitted);
+        let by: Vec<String> = rep.omitted_by_check.iter().map(|(k, n)| format!("{k}: {n}")).collect();
+        let _ = writeln!(s, "  ... and {} more ({})", rep.omitted, by.join(", "));
     }
     if let Some(t) = sorted.first().and_then(|d| d.t_us) {
         let spec = excerpt_spec(reference, &rep.recorded, t);
