@@ -34,12 +34,23 @@ pub struct JsonlWriter<W: Write> {
     axes: Vec<(usize, Box<[u8]>)>,
     error: Option<io::Error>,
     end: Option<EndReason>,
+    /// The text of the last value written in each numeric field of a sample (the axes by slot,
+    /// then rpm and angle): a value that did not change since the previous sample is copied, not
+    /// formatted again (most axes stand still most of the time).
+    last: Vec<(i64, Vec<u8>)>,
 }
 
 impl<W: Write> JsonlWriter<W> {
     /// A writer into `out`.
     pub fn new(out: W) -> Self {
-        JsonlWriter { out, buf: Vec::with_capacity(CHUNK + 4096), axes: Vec::new(), error: None, end: None }
+        JsonlWriter {
+            out,
+            buf: Vec::with_capacity(CHUNK + 4096),
+            axes: Vec::new(),
+            error: None,
+            end: None,
+            last: vec![(i64::MIN, Vec::new()); AXES + 2],
+        }
     }
 
     /// The reason of the `end` event, once it has been written.
@@ -105,9 +116,21 @@ impl<W: Write> JsonlWriter<W> {
         match &ev.event {
             Event::Sample(s) => {
                 b.extend_from_slice(b"sample\",\"axes\":");
-                push_axes(b, &self.axes, &s.axes);
-                b.extend_from_slice(b",\"spindle\":");
-                push_spindle(b, s);
+                if self.axes.is_empty() {
+                    b.extend_from_slice(b"{}");
+                }
+                for (slot, key) in &self.axes {
+                    b.extend_from_slice(key);
+                    push_cached(b, &mut self.last[*slot], s.axes[*slot], 6);
+                }
+                if !self.axes.is_empty() {
+                    b.push(b'}');
+                }
+                b.extend_from_slice(b",\"spindle\":{\"rpm\":");
+                push_cached(b, &mut self.last[AXES], s.spindle_mrpm, 3);
+                b.extend_from_slice(b",\"angle_deg\":");
+                push_cached(b, &mut self.last[AXES + 1], s.spindle_mdeg, 3);
+                b.push(b'}');
             }
             Event::Signal { signal, value } => {
                 b.extend_from_slice(b"signal\",\"name\":");
@@ -199,6 +222,16 @@ fn push_axes(b: &mut Vec<u8>, keys: &[(usize, Box<[u8]>)], values: &[i64; AXES])
         push_fixed(b, values[*slot], 6);
     }
     b.push(b'}');
+}
+
+/// `v` as [`push_fixed`] writes it, copied from `cache` when it holds the same value.
+fn push_cached(b: &mut Vec<u8>, cache: &mut (i64, Vec<u8>), v: i64, decimals: u32) {
+    if cache.0 != v {
+        cache.0 = v;
+        cache.1.clear();
+        push_fixed(&mut cache.1, v, decimals);
+    }
+    b.extend_from_slice(&cache.1);
 }
 
 /// `{"rpm":1000,"angle_deg":12.5}`.
