@@ -38,6 +38,10 @@ pub struct JsonlWriter<W: Write> {
     written: u64,
     /// The output budget: past it the writer asks the run to stop (`output_limit`).
     budget: Option<u64>,
+    /// The text of the last value written in each numeric field of a sample (the axes by slot,
+    /// then rpm and angle): a value that did not change since the previous sample is copied, not
+    /// formatted again (most axes stand still most of the time).
+    last: Vec<(i64, Vec<u8>)>,
 }
 
 impl<W: Write> JsonlWriter<W> {
@@ -51,6 +55,7 @@ impl<W: Write> JsonlWriter<W> {
             end: None,
             written: 0,
             budget: None,
+            last: vec![(i64::MIN, Vec::new()); AXES + 2],
         }
     }
 
@@ -131,9 +136,21 @@ impl<W: Write> JsonlWriter<W> {
         match &ev.event {
             Event::Sample(s) => {
                 b.extend_from_slice(b"sample\",\"axes\":");
-                push_axes(b, &self.axes, &s.axes);
-                b.extend_from_slice(b",\"spindle\":");
-                push_spindle(b, s);
+                if self.axes.is_empty() {
+                    b.extend_from_slice(b"{}");
+                }
+                for (slot, key) in &self.axes {
+                    b.extend_from_slice(key);
+                    push_cached(b, &mut self.last[*slot], s.axes[*slot], 6);
+                }
+                if !self.axes.is_empty() {
+                    b.push(b'}');
+                }
+                b.extend_from_slice(b",\"spindle\":{\"rpm\":");
+                push_cached(b, &mut self.last[AXES], s.spindle_mrpm, 3);
+                b.extend_from_slice(b",\"angle_deg\":");
+                push_cached(b, &mut self.last[AXES + 1], s.spindle_mdeg, 3);
+                b.push(b'}');
             }
             Event::Signal { signal, value } => {
                 b.extend_from_slice(b"signal\",\"name\":");
@@ -231,6 +248,16 @@ fn push_axes(b: &mut Vec<u8>, keys: &[(usize, Box<[u8]>)], values: &[i64; AXES])
         push_fixed(b, values[*slot], 6);
     }
     b.push(b'}');
+}
+
+/// `v` as [`push_fixed`] writes it, copied from `cache` when it holds the same value.
+fn push_cached(b: &mut Vec<u8>, cache: &mut (i64, Vec<u8>), v: i64, decimals: u32) {
+    if cache.0 != v {
+        cache.0 = v;
+        cache.1.clear();
+        push_fixed(&mut cache.1, v, decimals);
+    }
+    b.extend_from_slice(&cache.1);
 }
 
 /// `{"rpm":1000,"angle_deg":12.5}`.

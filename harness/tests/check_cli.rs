@@ -77,7 +77,8 @@ fn conformant_recording_exits_0_with_reports() {
     assert!(j.starts_with("<?xml") && j.contains("failures=\"0\"") && j.contains("<testcase"), "{j}");
     let h = std::fs::read_to_string(&html).unwrap();
     assert!(h.contains("CONFORMANT"));
-    assert_eq!(h.matches("<svg").count(), 3, "tap, spindle, sync plots");
+    assert_eq!(h.matches("<svg").count(), 4, "tap, spindle, sync plots and the PLC signal lanes");
+    assert!(h.contains("id=\"lanes\"") && h.contains("class=\"lane\" data-signal=\"RGSPP\""), "signal lanes");
 }
 
 #[test]
@@ -119,6 +120,7 @@ fn divergent_recording_exits_1_and_reports_every_divergence() {
     assert!(j.contains("<failure type=\"CHK-EVT-02\"") && j.contains("classname=\"GSK-RT-11\""), "{j}");
     let h = std::fs::read_to_string(&html).unwrap();
     assert!(h.contains("DIVERGENT") && h.contains("class=\"divergence\"") && h.contains("divergence-row"));
+    assert!(h.contains("id=\"zoom-1\""), "a zoomed view around the first divergence");
     // Self-contained: no script, no external resource (the only URL is the SVG namespace).
     for bad in ["<script", "src=", "href=", "@import", "url("] {
         assert!(!h.contains(bad), "{bad} in the HTML report");

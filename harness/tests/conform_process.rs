@@ -99,7 +99,7 @@ fn the_python_example_adapter_passes_and_skips_the_dialects_it_does_not_run() {
     assert!(t.contains("0 failed"), "{t}");
     let xml = std::fs::read_to_string(&junit).unwrap();
     assert!(xml.contains("<skipped message=\"the controller does not run dialect fanuc-mill\"/>"), "{xml}");
-    assert!(xml.contains("name=\"scenarios/gsk/feed_hold/during_cutting.yaml\"/>"), "{xml}");
+    assert!(xml.contains("name=\"scenarios/gsk/feed_hold/during_cutting.yaml\" time=\""), "{xml}");
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert_eq!(json["failed"], 0);
     assert!(!json["rules"]["GSK-RT-27"]["passed"].as_array().unwrap().is_empty());

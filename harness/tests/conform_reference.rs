@@ -18,7 +18,19 @@ fn root() -> PathBuf {
 
 #[test]
 fn stepping_the_reference_repeats_every_scenario_run_exactly() {
-    let mut ctl = Reference::new();
+    repeats_every_scenario_run(Reference::new());
+}
+
+/// The protocol's time semantics (docs/adapter-protocol.md, `advance`): after a stop on a
+/// condition `now_us` is the time of the event that made it hold, and an input at `now_us + d`
+/// acts at that literal time. A controller that applies inputs at their literal `t_us` must give
+/// the scenario run's trace too (it did not when `now_us` was the time of the next event).
+#[test]
+fn a_controller_applying_inputs_at_their_literal_time_repeats_every_scenario_run() {
+    repeats_every_scenario_run(Reference::literal());
+}
+
+fn repeats_every_scenario_run(mut ctl: Reference) {
     let mut mismatched = Vec::new();
     let files = scenario_files(&root().join("scenarios"));
     assert!(files.len() > 100, "the scenario library is found");

@@ -103,7 +103,9 @@ impl Carried {
     ///    `F76.3` rise, else the first `RGTAP` rise (declared by the recording);
     /// 3. the first cycle start (`STL` rise; SHDR: `execution` going `ACTIVE`);
     /// 4. the first motion of the tap axis (when the recording records it);
-    /// 5. none: offset 0.
+    /// 5. the first spindle start (when it records the spindle speed and the reference turns it);
+    /// 6. the first motion of the axis that moves first in the reference (a recorded one);
+    /// 7. none: offset 0.
     pub fn default_anchor(&self, reference: &Trace, tap_slot: Option<usize>) -> Anchor {
         let m29 = reference.functions().any(|(_, l, c)| l == 'M' && c == 29);
         let rises = |s: Signal| self.declares(s) && reference.edges(s).any(|(_, v)| v);
@@ -121,6 +123,16 @@ impl Carried {
             return Anchor::Edge(Signal::Stl, true);
         }
         if tap_slot.is_some_and(|s| self.axis(s)) {
+            return Anchor::TapMotion;
+        }
+        if self.rpm && reference.samples().any(|(_, s)| s.spindle_mrpm != 0) {
+            return Anchor::SpindleStart;
+        }
+        let moves = |slot: usize| {
+            let mut v = reference.samples().map(|(_, s)| s.axes[slot]);
+            v.next().is_some_and(|first| v.any(|x| x != first))
+        };
+        if reference.meta.axes.iter().any(|a| self.axis(a.index) && moves(a.index)) {
             return Anchor::TapMotion;
         }
         Anchor::Offset(0)
@@ -180,8 +192,32 @@ pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
         let l = a.letter;
         out.push(note(format!("{l} position envelope"), 0, format!("{src} records no {l} position")));
     }
-    if r.tap.is_some() && !c.angle {
-        out.push(note("synchronisation error".into(), 0, format!("{src} records no spindle angle")));
+    if r.sync.is_empty() {
+        out.push(note(
+            "synchronisation error".into(),
+            0,
+            "the reference has no synchronised move (rigid tapping stroke, thread pass, encoder-following move)"
+                .into(),
+        ));
+    } else if !c.angle {
+        let n = r.sync.len();
+        out.push(note(
+            format!("synchronisation error ({n} synchronised moves)"),
+            n,
+            format!("{src} records no spindle angle"),
+        ));
+    } else {
+        for a in r.axes().iter().filter(|a| !c.axis(a.index)) {
+            let n = r.sync.iter().filter(|w| w.slot == a.index).count();
+            if n > 0 {
+                let l = a.letter;
+                out.push(note(
+                    format!("synchronisation error ({n} synchronised moves of {l})"),
+                    n,
+                    format!("{src} records no {l} position"),
+                ));
+            }
+        }
     }
     if !c.rpm {
         out.push(note("final spindle speed".into(), 0, format!("{src} records no spindle speed")));
@@ -250,9 +286,18 @@ pub(super) fn judge_missing_edges(c: &mut Comparator) {
 /// Whether the key points can be compared: the recording must carry the tap axis and the
 /// stroke signals (RGSPP or RGSPM); otherwise they are noted as not comparable.
 pub(super) fn key_points_comparable(c: &mut Comparator) -> bool {
-    let Some(tap) = c.r.tap else { return true };
-    let src = c.carried.source.clone();
     let what = "key points (pecks, depths, retract heights, bottom, pauses, return level, reversals)";
+    let Some(tap) = c.r.tap else {
+        if c.r.phases.iter().any(|p| p.1 == nc_engine::trace::Phase::Cutting) {
+            c.not_comparable.push(note(
+                what.into(),
+                0,
+                "the reference has no RGSPP/RGSPM strokes to read them from (its cuts are compared by the envelope and the synchronisation error)".into(),
+            ));
+        }
+        return false;
+    };
+    let src = c.carried.source.clone();
     let n = c.r.keys.segments.len() + c.r.keys.returns.len();
     if !c.carried.axis(tap.slot) {
         let l = c.r.axes().iter().find(|a| a.index == tap.slot).map_or('?', |a| a.letter);

@@ -39,7 +39,9 @@ pub struct KeyPoints {
     /// Each F76.3 fall: time, the tap's depth at the last sample before it, and half the travel
     /// to the sample after it (the uncertainty).
     pub returns: Vec<(i64, Option<i64>, i64)>,
-    /// Spindle reversals (sign changes of the speed) while F76.3 = 1.
+    /// Spindle reversals (sign changes of the speed) while F76.3 = 1, those in the last
+    /// [`SETTLE_US`] before F76.3 falls left out (a fall recorded a PLC scan late must not count
+    /// the spindle's restart after the cycle as a reversal in it).
     pub reversals: u32,
 }
 
@@ -75,6 +77,9 @@ impl KeyPoints {
     }
 }
 
+/// Reversals this close before F76.3 falls are not counted, µs.
+pub const SETTLE_US: i64 = 20_000;
+
 /// Most segments kept (a controller that strokes forever does not fill the memory).
 const MAX_SEGMENTS: usize = 100_000;
 
@@ -89,6 +94,7 @@ pub struct KeyTracker {
     last_rpm_sign: i64,
     last_was: (bool, bool),
     return_pending: bool,
+    last_reversal: Option<i64>,
 }
 
 impl KeyTracker {
@@ -103,6 +109,7 @@ impl KeyTracker {
             last_rpm_sign: 0,
             last_was: (false, false),
             return_pending: false,
+            last_reversal: None,
         }
     }
 
@@ -152,6 +159,7 @@ impl KeyTracker {
                     if sign != 0 {
                         if self.last_rpm_sign != 0 && sign != self.last_rpm_sign {
                             self.keys.reversals += 1;
+                            self.last_reversal = Some(t);
                         }
                         self.last_rpm_sign = sign;
                     }
@@ -181,6 +189,9 @@ impl KeyTracker {
                         }
                     }
                     (Signal::Rtap, false) if was => {
+                        if self.last_reversal.take().is_some_and(|r| t - r < SETTLE_US) {
+                            self.keys.reversals -= 1;
+                        }
                         self.close();
                         if self.keys.returns.len() < MAX_SEGMENTS {
                             self.keys.returns.push((t, self.last_depth, 0));

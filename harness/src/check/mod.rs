@@ -13,14 +13,18 @@
 //! The scenario's temporal rules run on a compact copy of the recorded trace through
 //! [`crate::scenario::expect::evaluate_discrete`].
 
+pub mod calibrate;
 pub mod carried;
 pub mod compare;
 pub mod events;
+pub mod handshake;
 pub mod html;
 pub mod keypoints;
 pub mod keypoints_cmp;
 pub mod reference;
 pub mod report;
+pub mod shift;
+pub mod sync;
 pub mod tolerance;
 
 use nc_engine::trace::{Signal, Trace, TraceEvent};
@@ -32,6 +36,11 @@ pub use tolerance::{Anchor, Tolerances};
 
 /// Most divergences listed one by one (the rest are counted).
 pub const MAX_DIVERGENCES: usize = 10_000;
+
+/// Most divergences of one check (`CHK-ENV-01`, ...) listed one by one: the first ones, the rest
+/// counted per check (`omitted_by_check`), so that one kind repeated over a long recording does
+/// not hide the others.
+pub const MAX_PER_CHECK: usize = 1_000;
 
 /// One way the recorded trace differs from the reference beyond tolerance.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -93,19 +102,32 @@ pub struct Figures {
     pub matched_events: usize,
     /// Largest |sync error|, mm.
     pub max_sync_error_mm: f64,
+    /// Recorded samples at which the synchronisation with the spindle was compared (0: the
+    /// sync error was not compared at all: "n/a", not 0 mm).
+    pub sync_samples: u64,
     /// Largest position excess beyond the envelope, mm.
     pub max_envelope_excess_mm: f64,
     /// Pecks (cuts) in the reference / recorded.
     pub pecks: (usize, usize),
+    /// How well the alignment fits: the root mean square of recorded − reference positions at
+    /// the same time over every recorded axis and sample within the reference's run, mm (None:
+    /// no position compared).
+    pub fit_rms_mm: Option<f64>,
+    /// Position values in that figure.
+    pub fit_values: u64,
 }
 
 /// The outcome of a comparison.
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
-    /// Every divergence, in the order found (see [`Report::sorted`]).
+    /// Every divergence, by time (those without a time last); in JSON each also has its margin
+    /// as a number with its unit (`margin_value`, `margin_unit`).
+    #[serde(serialize_with = "divergences_json")]
     pub divergences: Vec<Divergence>,
-    /// Divergences beyond [`MAX_DIVERGENCES`], not listed.
+    /// Divergences beyond [`MAX_DIVERGENCES`] or [`MAX_PER_CHECK`], not listed.
     pub omitted: usize,
+    /// Of those, how many of each check.
+    pub omitted_by_check: std::collections::BTreeMap<String, usize>,
     /// The scenario's temporal rules on the recorded trace.
     pub rules: Vec<Verdict>,
     /// The anchor used.
@@ -124,6 +146,32 @@ pub struct Report {
     /// Plot points of the recorded trace.
     #[serde(skip)]
     pub series: Vec<Point>,
+    /// Wall time of the comparison, s (JUnit `time`).
+    pub seconds: f64,
+}
+
+/// A margin's number and unit (`0.139809 mm`, `130 ms beyond the window`, `5 rpm`); None for
+/// `-`.
+pub fn margin_number(margin: &str) -> Option<(f64, &str)> {
+    let mut it = margin.split_whitespace();
+    let v: f64 = it.next()?.parse().ok()?;
+    Some((v, it.next().unwrap_or("")))
+}
+
+fn divergences_json<S: serde::Serializer>(ds: &[Divergence], s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct WithNumber<'a> {
+        #[serde(flatten)]
+        d: &'a Divergence,
+        margin_value: Option<f64>,
+        margin_unit: Option<&'a str>,
+    }
+    let mut v: Vec<&Divergence> = ds.iter().collect();
+    v.sort_by_key(|d| d.t_us.unwrap_or(i64::MAX));
+    s.collect_seq(v.into_iter().map(|d| {
+        let m = margin_number(&d.margin);
+        WithNumber { d, margin_value: m.map(|x| x.0), margin_unit: m.map(|x| x.1) }
+    }))
 }
 
 impl Report {
@@ -159,6 +207,7 @@ pub fn default_anchor(reference: &Trace) -> Anchor {
 
 /// Compares the recorded events (time as recorded, in order) with `reference`.
 pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, spec: &CheckSpec) -> Report {
+    let started = std::time::Instant::now();
     let r = reference::Reference::new(reference);
     let anchor =
         spec.anchor.clone().unwrap_or_else(|| spec.carried.default_anchor(reference, r.tap.map(|t| t.slot)));
@@ -203,12 +252,16 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
         reference_events: compare_totals(reference),
         matched_events: 0,
         max_sync_error_mm: c.max_sync_nm / 1e6,
+        sync_samples: c.sync_samples,
         max_envelope_excess_mm: c.max_env_nm / 1e6,
         pecks: (r.keys.pecks().len(), keys.pecks().len()),
+        fit_rms_mm: (c.fit.1 > 0).then(|| (c.fit.0 / c.fit.1 as f64).sqrt() / 1e6),
+        fit_values: c.fit.1,
     };
     Report {
         divergences: std::mem::take(&mut c.divergences),
         omitted: c.omitted,
+        omitted_by_check: std::mem::take(&mut c.omitted_by_check),
         rules,
         anchor: if c.anchored { anchor.describe() } else { format!("{} (not found)", anchor.describe()) },
         offset_us: c.offset(),
@@ -217,6 +270,7 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
         figures: Figures { matched_events: c.matched(), ..figures },
         recorded: compact,
         series: std::mem::take(&mut c.series),
+        seconds: started.elapsed().as_secs_f64(),
     }
 }
 

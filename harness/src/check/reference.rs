@@ -40,6 +40,13 @@ pub struct Reference<'a> {
     pub phases: Vec<(i64, Phase)>,
     /// Inputs by time (name, value).
     pub inputs: Vec<(i64, String, String)>,
+    /// The cumulative unwrapped spindle angle at each sample, milli-degrees.
+    pub cum_mdeg: Vec<f64>,
+    /// The synchronised moves (rigid strokes, thread passes, encoder-following moves).
+    pub sync: Vec<super::sync::Window>,
+    /// The sample index of the last lookup: recorded times mostly grow, so the next lookup
+    /// starts there.
+    hint: std::cell::Cell<usize>,
 }
 
 /// The change of a spindle angle from `a0` to `a1` (milli-degrees) over `dt_us`, unwrapped using
@@ -52,12 +59,21 @@ pub fn unwrap_delta(a0: i64, m0: i64, a1: i64, m1: i64, dt_us: i64) -> f64 {
     expected + diff
 }
 
-/// Finds the first motion of one axis in a stream of samples: the time it first strays more
-/// than a threshold from where it stood at the first sample, interpolated between the two
-/// samples around the crossing.
+/// What a [`MotionDetector`] watches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Watch {
+    /// An axis' position (slot).
+    Axis(usize),
+    /// The spindle's speed (its magnitude).
+    Spindle,
+}
+
+/// Finds the first motion of one axis (or the first start of the spindle) in a stream of
+/// samples: the time it first strays more than a threshold from where it stood at the first
+/// sample, interpolated between the two samples around the crossing.
 #[derive(Debug, Clone, Copy)]
 pub struct MotionDetector {
-    slot: usize,
+    watch: Watch,
     threshold_nm: i64,
     start: Option<i64>,
     prev: Option<(i64, i64)>,
@@ -66,13 +82,21 @@ pub struct MotionDetector {
 impl MotionDetector {
     /// A detector for axis `slot` (threshold at least 1 nm).
     pub fn new(slot: usize, threshold_nm: i64) -> MotionDetector {
-        MotionDetector { slot, threshold_nm: threshold_nm.max(1), start: None, prev: None }
+        MotionDetector::watching(Watch::Axis(slot), threshold_nm)
+    }
+
+    /// A detector for `watch` (threshold at least 1 unit: nm, milli-rpm).
+    pub fn watching(watch: Watch, threshold: i64) -> MotionDetector {
+        MotionDetector { watch, threshold_nm: threshold.max(1), start: None, prev: None }
     }
 
     /// One sample at `t`; the time of the crossing once it is found (then every later call
     /// finds it again from the new sample: call it until the first `Some`).
     pub fn sample(&mut self, t: i64, s: &Sample) -> Option<i64> {
-        let p = s.axes[self.slot];
+        let p = match self.watch {
+            Watch::Axis(slot) => s.axes[slot],
+            Watch::Spindle => s.spindle_mrpm.abs(),
+        };
         let p0 = *self.start.get_or_insert(p);
         let prev = self.prev.replace((t, p));
         let dev = p - p0;
@@ -89,8 +113,23 @@ impl MotionDetector {
 impl<'a> Reference<'a> {
     /// The first motion of axis `slot` (see [`MotionDetector`]).
     pub fn first_motion(&self, slot: usize, threshold_nm: i64) -> Option<i64> {
-        let mut d = MotionDetector::new(slot, threshold_nm);
+        self.first_change(Watch::Axis(slot), threshold_nm)
+    }
+
+    /// The first change of what `watch` watches beyond `threshold` (see [`MotionDetector`]).
+    pub fn first_change(&self, watch: Watch, threshold: i64) -> Option<i64> {
+        let mut d = MotionDetector::watching(watch, threshold);
         self.t.iter().zip(&self.s).find_map(|(&t, s)| d.sample(t, s))
+    }
+
+    /// The axis (among those `carried` accepts) that moves first in the reference.
+    pub fn first_moving_axis(&self, threshold_nm: i64, carried: impl Fn(usize) -> bool) -> Option<usize> {
+        self.axes()
+            .iter()
+            .filter(|a| carried(a.index))
+            .filter_map(|a| self.first_motion(a.index, threshold_nm).map(|t| (t, a.index)))
+            .min()
+            .map(|x| x.1)
     }
 
     /// Indexes `trace`.
@@ -116,7 +155,43 @@ impl<'a> Reference<'a> {
         for e in &trace.events {
             kt.event(e.t_us as i64, &e.event);
         }
-        Reference { trace, t, s, tap, keys: kt.finish(), end_us, phases, inputs }
+        let cum_mdeg = super::sync::cumulative_angle(&t, &s);
+        let mut r = Reference {
+            trace,
+            t,
+            s,
+            tap,
+            keys: kt.finish(),
+            end_us,
+            phases,
+            inputs,
+            cum_mdeg,
+            sync: Vec::new(),
+            hint: std::cell::Cell::new(0),
+        };
+        r.sync = super::sync::windows(&r);
+        r
+    }
+
+    /// The axis that travels furthest over [t0, t1] (None: none moves).
+    pub fn furthest_axis(&self, t0: i64, t1: i64) -> Option<usize> {
+        let i0 = self.t.partition_point(|&x| x < t0);
+        let i1 = self.t.partition_point(|&x| x <= t1);
+        let seg = self.s.get(i0..i1.max(i0))?;
+        let mut travel = [0i64; AXES];
+        for w in seg.windows(2) {
+            for (a, tr) in travel.iter_mut().enumerate() {
+                *tr += (w[1].axes[a] - w[0].axes[a]).abs();
+            }
+        }
+        let slot = (0..AXES).max_by_key(|&a| travel[a])?;
+        (travel[slot] > 0).then_some(slot)
+    }
+
+    /// The index in [`Reference::sync`] of the synchronised move in force at `t` (None: none).
+    pub fn sync_index(&self, t: i64) -> Option<usize> {
+        let k = self.sync.partition_point(|w| w.t0 <= t);
+        k.checked_sub(1).filter(|&i| t <= self.sync[i].t1)
     }
 
     /// The axes of the trace.
@@ -126,8 +201,17 @@ impl<'a> Reference<'a> {
 
     /// The index of the last sample at or before `t` (None before the first).
     fn idx_at(&self, t: i64) -> Option<usize> {
-        let k = self.t.partition_point(|&x| x <= t);
-        k.checked_sub(1)
+        let h = self.hint.get();
+        // The sample at or before `t`: the hint, or one of the next two, else a binary search.
+        for k in h..(h + 3).min(self.t.len()) {
+            if self.t[k] <= t && self.t.get(k + 1).is_none_or(|&n| n > t) {
+                self.hint.set(k);
+                return Some(k);
+            }
+        }
+        let k = self.t.partition_point(|&x| x <= t).checked_sub(1)?;
+        self.hint.set(k);
+        Some(k)
     }
 
     /// A value read from samples, interpolated linearly at `t` (held after the last sample).
@@ -141,6 +225,19 @@ impl<'a> Reference<'a> {
             }
             _ => Some(v0),
         }
+    }
+
+    /// The spindle angle at `t` (milli-degrees, 0 ≤ a < 360 000), interpolated unwrapped.
+    pub fn angle_at(&self, t: i64) -> Option<f64> {
+        let i = self.idx_at(t).or(if self.s.is_empty() { None } else { Some(0) })?;
+        let a = match self.cum_mdeg.get(i + 1) {
+            Some(&n) if self.t[i] <= t => {
+                let f = (t - self.t[i]) as f64 / (self.t[i + 1] - self.t[i]).max(1) as f64;
+                self.cum_mdeg[i] + (n - self.cum_mdeg[i]) * f
+            }
+            _ => self.cum_mdeg[i],
+        };
+        Some(a.rem_euclid(360_000.0))
     }
 
     /// Position of `slot` at `t`, interpolated.
@@ -159,6 +256,50 @@ impl<'a> Reference<'a> {
             let v = s.axes[slot] as f64;
             lo = lo.min(v);
             hi = hi.max(v);
+        }
+        Some((lo, hi))
+    }
+
+    /// Every axis at `t`, interpolated (as [`Reference::pos_at`], in one search).
+    pub fn pos_all(&self, t: i64) -> Option<[f64; AXES]> {
+        let i = self.idx_at(t).or(if self.s.is_empty() { None } else { Some(0) })?;
+        let a = &self.s[i];
+        let mut out = [0.0; AXES];
+        match self.s.get(i + 1) {
+            Some(n) if self.t[i] <= t => {
+                let f = (t - self.t[i]) as f64 / (self.t[i + 1] - self.t[i]).max(1) as f64;
+                for (k, o) in out.iter_mut().enumerate() {
+                    let v0 = a.axes[k] as f64;
+                    *o = v0 + (n.axes[k] as f64 - v0) * f;
+                }
+            }
+            _ => {
+                for (k, o) in out.iter_mut().enumerate() {
+                    *o = a.axes[k] as f64;
+                }
+            }
+        }
+        Some(out)
+    }
+
+    /// The range (min, max) of every axis over [t0, t1], ends interpolated (as
+    /// [`Reference::range`], in one pass).
+    pub fn range_all(&self, t0: i64, t1: i64) -> Option<([f64; AXES], [f64; AXES])> {
+        let a = self.pos_all(t0)?;
+        let b = self.pos_all(t1)?;
+        let (mut lo, mut hi) = ([0.0; AXES], [0.0; AXES]);
+        for k in 0..AXES {
+            lo[k] = a[k].min(b[k]);
+            hi[k] = a[k].max(b[k]);
+        }
+        let i0 = self.t.partition_point(|&x| x < t0);
+        let i1 = self.t.partition_point(|&x| x <= t1);
+        for s in &self.s[i0..i1.max(i0)] {
+            for k in 0..AXES {
+                let v = s.axes[k] as f64;
+                lo[k] = lo[k].min(v);
+                hi[k] = hi[k].max(v);
+            }
         }
         Some((lo, hi))
     }

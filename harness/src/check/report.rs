@@ -31,14 +31,22 @@ pub fn summary(rep: &Report, reference: &Trace, title: &str) -> String {
     let _ = writeln!(s, "{title}");
     let _ = writeln!(
         s,
-        "aligned on the {} (reference = recorded {:+} µs); {} recorded events, {} samples; {}/{} reference events matched; max sync error {} mm; pecks {} reference, {} recorded",
+        "aligned on the {} (reference = recorded {:+} µs; fit {}); {} recorded events, {} samples; {}/{} reference events matched; max sync error {}; pecks {} reference, {} recorded",
         rep.anchor,
         rep.offset_us,
+        match f.fit_rms_mm {
+            Some(rms) => format!("positions rms {} mm over {} values", fixed((rms * 1e6).round() as i64, 6), f.fit_values),
+            None => "n/a: no position compared".into(),
+        },
         f.recorded_events,
         f.recorded_samples,
         f.matched_events,
         f.reference_events,
-        fixed((f.max_sync_error_mm * 1e6).round() as i64, 6),
+        if f.sync_samples > 0 {
+            format!("{} mm ({} samples)", fixed((f.max_sync_error_mm * 1e6).round() as i64, 6), f.sync_samples)
+        } else {
+            "n/a (not compared)".into()
+        },
         f.pecks.0,
         f.pecks.1
     );
@@ -68,7 +76,8 @@ pub fn summary(rep: &Report, reference: &Trace, title: &str) -> String {
         );
     }
     if rep.omitted > 0 {
-        let _ = writeln!(s, "  ... and {} more", rep.omitted);
+        let by: Vec<String> = rep.omitted_by_check.iter().map(|(k, n)| format!("{k}: {n}")).collect();
+        let _ = writeln!(s, "  ... and {} more ({})", rep.omitted, by.join(", "));
     }
     if let Some(t) = sorted.first().and_then(|d| d.t_us) {
         let spec = excerpt_spec(reference, &rep.recorded, t);
@@ -204,7 +213,8 @@ pub fn junit(rep: &Report, suite: &str) -> String {
         );
     }
     format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"nc-conform check\" tests=\"{tests}\" failures=\"{failures}\" skipped=\"{skipped}\">\n  <testsuite name=\"{}\" tests=\"{tests}\" failures=\"{failures}\" errors=\"0\" skipped=\"{skipped}\">\n{cases}  </testsuite>\n</testsuites>\n",
-        xml_escape(suite)
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"nc-conform check\" tests=\"{tests}\" failures=\"{failures}\" skipped=\"{skipped}\" time=\"{time:.3}\">\n  <testsuite name=\"{}\" tests=\"{tests}\" failures=\"{failures}\" errors=\"0\" skipped=\"{skipped}\" time=\"{time:.3}\">\n{cases}  </testsuite>\n</testsuites>\n",
+        xml_escape(suite),
+        time = rep.seconds
     )
 }

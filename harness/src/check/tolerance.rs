@@ -79,9 +79,12 @@ pub enum Anchor {
     Edge(Signal, bool),
     /// An explicit offset: reference time = recorded time + offset.
     Offset(i64),
-    /// The first motion of the tap axis (beyond `position_mm` from where it stood): for a
-    /// recording that carries neither functions nor the cycle-start and rigid-tapping signals.
+    /// The first motion of the tap axis (beyond `position_mm` from where it stood; without a
+    /// tap, of the axis that moves first in the reference): for a recording that carries neither
+    /// functions nor the cycle-start and rigid-tapping signals.
     TapMotion,
+    /// The first start of the spindle (its speed beyond `speed_rpm` from where it stood).
+    SpindleStart,
 }
 
 impl Anchor {
@@ -90,6 +93,9 @@ impl Anchor {
     pub fn parse(s: &str) -> Option<Anchor> {
         if s.eq_ignore_ascii_case("motion") {
             return Some(Anchor::TapMotion);
+        }
+        if s.eq_ignore_ascii_case("spindle") {
+            return Some(Anchor::SpindleStart);
         }
         if let Some(v) = s.strip_prefix("offset:") {
             return v.trim().parse().ok().map(Anchor::Offset);
@@ -113,7 +119,8 @@ impl Anchor {
             Anchor::Function(l, c) => format!("first {l}{c}"),
             Anchor::Edge(s, v) => format!("first {} = {}", s.name(), *v as u8),
             Anchor::Offset(o) => format!("offset {o} µs"),
-            Anchor::TapMotion => "first motion of the tap axis".into(),
+            Anchor::TapMotion => "first motion of the tap axis (else the first axis to move)".into(),
+            Anchor::SpindleStart => "first spindle start".into(),
         }
     }
 }
@@ -156,15 +163,115 @@ pub struct Context {
     pub scenario_rules: Vec<String>,
     /// The reference's phase at that time.
     pub phase: Option<Phase>,
+    /// The rule of the synchronised move the reference is in then (`sync_rule`).
+    pub sync_rule: Option<&'static str>,
+    /// The reference is in a synchronised move then (a rigid stroke, a thread pass, ...).
+    pub in_sync: bool,
 }
 
 /// The M codes that are not spindle clamp codes.
 const PLAIN_M: [u32; 9] = [0, 1, 2, 3, 4, 5, 19, 29, 30];
 
+/// The rule ids of one dialect for what a divergence can be about (`docs/checking.md`, "Rule ids
+/// of divergences"): each list in order of preference, the first the scenario cites winning.
+struct Ids {
+    /// SPL/STL edges, and motion under a feed hold.
+    feed_hold: &'static [&'static str],
+    dry_run: &'static [&'static str],
+    machine_lock: &'static [&'static str],
+    /// Motion or the final speed after a reset.
+    reset: &'static [&'static str],
+    /// The final spindle speed otherwise.
+    end_speed: &'static [&'static str],
+    /// Peck count, depths, retract heights, reversals.
+    pecks: &'static [&'static str],
+    /// Hole bottom, return level.
+    bottom: &'static [&'static str],
+    /// The pause at the bottom.
+    dwell: &'static [&'static str],
+    /// A spindle clamp M code (GSK).
+    clamp: &'static [&'static str],
+}
+
+fn ids(dialect: &str) -> Ids {
+    match dialect {
+        "gsk-lathe" => Ids {
+            feed_hold: &["GSK-RT-27", "GSK-G923-12"],
+            dry_run: &["GSK-RT-23", "GSK-G923-14"],
+            machine_lock: &["GSK-RT-24", "GSK-G923-14"],
+            reset: &["GSK-RT-25", "GSK-G923-15"],
+            end_speed: &["GSK-RT-29"],
+            pecks: &["GSK-RT-08", "GSK-RT-09", "GSK-G923-05"],
+            bottom: &["GSK-RT-03", "GSK-G923-05"],
+            dwell: &["GSK-RT-04"],
+            clamp: &["GSK-RT-11"],
+        },
+        "linuxcnc" => Ids {
+            feed_hold: &["LCNC-INP-04", "LCNC-TAP-02", "LCNC-G331-03", "LCNC-G76-04"],
+            dry_run: &["LCNC-INP-02"],
+            machine_lock: &["LCNC-INP-03"],
+            reset: &["LCNC-INP-04", "LCNC-G331-03", "COM-INP-05"],
+            end_speed: &["COM-MOT-06"],
+            pecks: &["LCNC-CYC-07", "LCNC-G76-01"],
+            bottom: &["LCNC-CYC-04", "LCNC-CYC-03", "LCNC-G331-02"],
+            dwell: &["LCNC-CYC-07", "LCNC-CYC-06"],
+            clamp: &[],
+        },
+        "heidenhain" => Ids {
+            feed_hold: &["HDH-C832-16"],
+            dry_run: &["HDH-C832-15"],
+            machine_lock: &["HDH-C832-16"],
+            reset: &["HDH-C832-16"],
+            end_speed: &["HDH-LEX-04"],
+            pecks: &["HDH-C832-07", "HDH-C832-10"],
+            bottom: &["HDH-C832-06", "HDH-C832-11"],
+            dwell: &["HDH-C832-09"],
+            clamp: &[],
+        },
+        "knd-lathe" => Ids {
+            feed_hold: &["COM-INP-02"],
+            dry_run: &["COM-MOT-05"],
+            machine_lock: &["COM-MOT-04"],
+            reset: &["COM-INP-05", "KND-CSS-06"],
+            end_speed: &["KND-G93-09", "COM-MOT-06"],
+            pecks: &["KND-G93-03"],
+            bottom: &["KND-G93-04", "KND-G93-05"],
+            dwell: &["KND-G93-04", "KND-G93-06"],
+            clamp: &[],
+        },
+        _ => Ids {
+            feed_hold: &["FAN-RT-15"],
+            dry_run: &["COM-MOT-05"],
+            machine_lock: &["COM-MOT-04"],
+            reset: &["FAN-RT-14"],
+            end_speed: &["FAN-RT-14"],
+            pecks: &["FAN-RT-05", "FAN-RT-04"],
+            bottom: &["FAN-RT-03"],
+            dwell: &["FAN-RT-03"],
+            clamp: &[],
+        },
+    }
+}
+
+/// The rule of a synchronised move by the block's G code (`sync::Window::code`).
+pub fn sync_rule(dialect: &str, code: Option<&str>) -> Option<&'static str> {
+    if dialect == "heidenhain" {
+        return Some("HDH-C832-05");
+    }
+    Some(match (dialect, code?) {
+        ("gsk-lathe", "G92.3") => "GSK-G923-11",
+        ("knd-lathe", "G32" | "G92") => "KND-LEX-08",
+        ("knd-lathe", "G93") => "KND-G93-03",
+        ("linuxcnc", "G33.1") => "LCNC-G331-01",
+        ("linuxcnc", "G33") => "LCNC-G33-01",
+        ("linuxcnc", "G76") => "LCNC-G76-01",
+        _ => return None,
+    })
+}
+
 /// The rule id a divergence breaks: the first candidate the scenario cites, else the first.
 pub fn attribute(topic: Topic, ctx: &Context) -> String {
-    let gsk = ctx.dialect.starts_with("gsk");
-    let pick = |g: &'static str, f: &'static str| if gsk { g } else { f };
+    let d = ids(&ctx.dialect);
     let has = |name: &str| ctx.inputs.iter().any(|i| i == name);
     let mut cands: Vec<&str> = Vec::new();
     if ctx.dialect.starts_with("knd") {
@@ -181,23 +288,23 @@ pub fn attribute(topic: Topic, ctx: &Context) -> String {
         }
     }
     if let Topic::Edge(Signal::Spl | Signal::Stl, _) = topic {
-        cands.push(pick("GSK-RT-27", "FAN-RT-15"));
+        cands.extend(d.feed_hold);
     }
     if matches!(topic, Topic::Envelope | Topic::Bottom | Topic::Pecks | Topic::Sync | Topic::Dwell) {
         if ctx.overload {
             cands.push("GSK-RT-26");
         }
         if has("machine_lock") {
-            cands.push(pick("GSK-RT-24", "COM-MOT-04"));
+            cands.extend(d.machine_lock);
         }
         if has("dry_run") {
-            cands.push(pick("GSK-RT-23", "COM-MOT-05"));
+            cands.extend(d.dry_run);
         }
         if has("reset") {
-            cands.push(pick("GSK-RT-25", "FAN-RT-14"));
+            cands.extend(d.reset);
         }
         if has("feed_hold") {
-            cands.push(pick("GSK-RT-27", "FAN-RT-15"));
+            cands.extend(d.feed_hold);
         }
     }
     match topic {
@@ -210,22 +317,35 @@ pub fn attribute(topic: Topic, ctx: &Context) -> String {
         Topic::Edge(Signal::Rgspp | Signal::Rgspm, _) => cands.extend(["COM-SYNC-03", "COM-SYNC-04"]),
         Topic::Edge(Signal::Zsp, _) => cands.push("COM-PLC-07"),
         Topic::Edge(_, _) => cands.push("COM-PLC-01"),
-        Topic::Function('M', c) if gsk && !PLAIN_M.contains(&c) => cands.push("GSK-RT-11"),
+        Topic::Function('M', c) if !d.clamp.is_empty() && !PLAIN_M.contains(&c) => cands.extend(d.clamp),
         Topic::Function('M', 29) => cands.push("COM-PLC-02"),
         Topic::Function(..) => cands.push("COM-PLC-01"),
         Topic::Alarm => {}
-        Topic::Pecks | Topic::Reversals => {
-            cands.extend(if gsk { ["GSK-RT-08", "GSK-RT-09"] } else { ["FAN-RT-05", "FAN-RT-04"] })
+        Topic::Pecks | Topic::Reversals => cands.extend(d.pecks),
+        Topic::Bottom => cands.extend(d.bottom),
+        Topic::Dwell => cands.extend(d.dwell),
+        Topic::Sync => {
+            cands.extend(ctx.sync_rule);
+            cands.push("COM-SYNC-01");
         }
-        Topic::Bottom => cands.push(pick("GSK-RT-03", "FAN-RT-03")),
-        Topic::Dwell => cands.push(pick("GSK-RT-04", "FAN-RT-03")),
-        Topic::Sync => cands.push("COM-SYNC-01"),
-        Topic::Envelope => cands.push("COM-SYNC-01"),
+        Topic::Envelope if ctx.in_sync || ctx.phase.is_none() => {
+            cands.extend(ctx.sync_rule);
+            cands.push("COM-SYNC-01");
+        }
+        // A position off outside any synchronised move: the motion's own rule.
+        Topic::Envelope => match (ctx.dialect.as_str(), ctx.phase) {
+            ("linuxcnc", Some(Phase::Cutting | Phase::Dwell | Phase::Retract | Phase::Positioning)) => {
+                cands.extend(["LCNC-CYC-03", "LCNC-MOD-02"])
+            }
+            ("linuxcnc", _) => cands.push("LCNC-MOD-02"),
+            (_, Some(Phase::Cutting | Phase::Dwell)) => cands.push("COM-MOT-02"),
+            _ => cands.push("COM-MOT-01"),
+        },
         Topic::End => {
             if has("reset") {
-                cands.push(pick("GSK-RT-25", "FAN-RT-14"));
+                cands.extend(d.reset);
             }
-            cands.push(pick("GSK-RT-29", "FAN-RT-14"));
+            cands.extend(d.end_speed);
         }
     }
     if let Some(c) = cands.iter().find(|c| ctx.scenario_rules.iter().any(|r| r == *c)) {
@@ -249,6 +369,7 @@ mod tests {
         assert_eq!(Anchor::parse("RGTAP:0"), Some(Anchor::Edge(Signal::Rgtap, false)));
         assert_eq!(Anchor::parse("offset:-15"), Some(Anchor::Offset(-15)));
         assert_eq!(Anchor::parse("motion"), Some(Anchor::TapMotion));
+        assert_eq!(Anchor::parse("spindle"), Some(Anchor::SpindleStart));
         assert_eq!(Anchor::parse("bogus"), None);
         assert_eq!(Anchor::parse(""), None);
     }
@@ -264,5 +385,55 @@ mod tests {
         assert_eq!(attribute(Topic::Envelope, &ctx), "GSK-RT-23");
         ctx.scenario_rules.push("GSK-RT-09".into());
         assert_eq!(attribute(Topic::Pecks, &Context { inputs: vec![], ..ctx }), "GSK-RT-09");
+    }
+
+    /// Issue 14 §5: no dialect falls back to another dialect's ids (LinuxCNC, Heidenhain and KND
+    /// were given FAN-RT-14/15).
+    #[test]
+    fn every_dialect_gets_its_own_ids() {
+        for dialect in nc_engine::dialect_names() {
+            let ctx = |inputs: &[&str]| Context {
+                dialect: dialect.into(),
+                inputs: inputs.iter().map(|s| s.to_string()).collect(),
+                ..Context::default()
+            };
+            let family = match dialect {
+                "gsk-lathe" => "GSK-",
+                "fanuc-mill" => "FAN-",
+                "linuxcnc" => "LCNC-",
+                "heidenhain" => "HDH-",
+                _ => "KND-",
+            };
+            let got = [
+                attribute(Topic::Edge(Signal::Stl, false), &ctx(&[])),
+                attribute(Topic::Envelope, &ctx(&["reset"])),
+                attribute(Topic::Pecks, &ctx(&[])),
+                attribute(Topic::Bottom, &ctx(&[])),
+                attribute(Topic::End, &ctx(&["reset"])),
+            ];
+            for (k, g) in got.iter().enumerate() {
+                let other = ["GSK-", "FAN-", "LCNC-", "HDH-", "KND-"]
+                    .iter()
+                    .any(|f| *f != family && g.starts_with(f));
+                assert!(!other, "{dialect}: topic {k} attributed to {g}");
+            }
+            if dialect != "knd-lathe" {
+                assert!(got[2].starts_with(family), "{dialect}: pecks → {}", got[2]);
+            }
+        }
+        let lc = Context {
+            dialect: "linuxcnc".into(),
+            sync_rule: sync_rule("linuxcnc", Some("G76")),
+            ..Context::default()
+        };
+        assert_eq!(attribute(Topic::Sync, &lc), "LCNC-G76-01");
+        // A position off outside any synchronised move is the motion's, not COM-SYNC-01.
+        let drill =
+            Context { dialect: "linuxcnc".into(), phase: Some(Phase::Positioning), ..Context::default() };
+        assert_eq!(attribute(Topic::Envelope, &drill), "LCNC-CYC-03");
+        let rapid = Context { dialect: "gsk-lathe".into(), phase: Some(Phase::Idle), ..Context::default() };
+        assert_eq!(attribute(Topic::Envelope, &rapid), "COM-MOT-01");
+        let stroke = Context { in_sync: true, ..rapid };
+        assert_eq!(attribute(Topic::Envelope, &stroke), "COM-SYNC-01");
     }
 }

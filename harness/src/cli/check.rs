@@ -53,7 +53,8 @@ pub struct CheckArgs {
     pub lenient: bool,
 
     /// The event both time bases are tied at: `M29` (default), `STL` (the first cycle start),
-    /// any signal `NAME[:0|1]` or function `M.../S.../T...`.
+    /// any signal `NAME[:0|1]` or function `M.../S.../T...`, `motion` (the first motion of the
+    /// tap axis, else of the first axis to move), `spindle` (the first spindle start).
     #[arg(long, value_name = "EVENT", conflicts_with = "offset_us")]
     pub anchor: Option<String>,
 
@@ -180,7 +181,9 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         (_, Some(o)) => Some(Anchor::Offset(o)),
         (Some(a), None) => Some(Anchor::parse(a).ok_or_else(|| {
             let mut e = InputError::new("--anchor", format!("unknown anchor `{a}`"));
-            e.expected = Some("M29, STL, a signal NAME[:0|1], a function M../S../T.., offset:N".into());
+            e.expected = Some(
+                "M29, STL, a signal NAME[:0|1], a function M../S../T.., motion, spindle, offset:N".into(),
+            );
             e
         })?),
         (None, None) => None,
@@ -226,8 +229,10 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     // MAX_RECORDED_EVENTS of them (docs/input-limits.md).
     let mut discrete = 0usize;
     let trace_name = display_name(&args.trace);
+    let mut progress = Progress::new(&display_name(&args.trace));
     let stream = std::iter::from_fn(|| match importer.next()? {
         Ok(ev) => {
+            progress.tick(ev.t_us);
             if !matches!(ev.event, Event::Sample(_)) {
                 discrete += 1;
                 if discrete > MAX_RECORDED_EVENTS {
@@ -253,6 +258,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     });
     let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
     let rep = check::check(&reference, stream.map(|e: TraceEvent| e), &spec);
+    progress.done();
     if let Some(e) = failure {
         return Err(import_error(&e));
     }
@@ -277,4 +283,139 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         write(p, check::html::page(&rep, &reference, &head))?;
     }
     Ok(if rep.conformant() { EXIT_OK } else { EXIT_RUN_FAILED })
+}
+
+/// `nc-conform calibrate`: estimate a machine's timing from a recording of a known-good run.
+#[derive(Debug, clap::Args)]
+pub struct CalibrateArgs {
+    /// The G-code program the recording ran.
+    #[arg(value_name = "PROGRAM")]
+    pub input: PathBuf,
+
+    /// The recorded trace of a known-good run: JSON Lines, CSV (with --map), VCD or SHDR.
+    #[arg(long, value_name = "FILE")]
+    pub trace: PathBuf,
+
+    /// The dialect of the program.
+    #[arg(long, value_name = "DIALECT", value_parser = PossibleValuesParser::new(nc_engine::dialect_names()))]
+    pub dialect: String,
+
+    /// Base parameters (kept where nothing is estimated).
+    #[arg(long, value_name = "FILE.yaml")]
+    pub params: Option<PathBuf>,
+
+    /// Column map of a CSV recording (or of SHDR keys).
+    #[arg(long, value_name = "MAP.yaml")]
+    pub map: Option<PathBuf>,
+
+    /// The recording's format when the first bytes do not tell it.
+    #[arg(long, value_name = "FORMAT")]
+    pub format: Option<String>,
+
+    /// Leave out faulty rows instead of stopping.
+    #[arg(long)]
+    pub lenient: bool,
+
+    /// Write the parameter file here instead of standard output.
+    #[arg(long, value_name = "FILE.yaml")]
+    pub out: Option<PathBuf>,
+}
+
+/// Carries out `nc-conform calibrate`; returns the exit status (0, or 2 for an input error).
+pub fn calibrate(args: &CalibrateArgs) -> u8 {
+    let inner = || -> Result<(), InputError> {
+        let input_name = display_name(&args.input);
+        let mut machine = Machine::new(&args.dialect)
+            .ok_or_else(|| InputError::new("--dialect", format!("unknown dialect `{}`", args.dialect)))?;
+        if let Some(p) = &args.params {
+            let yaml = input::read_utf8(p, input::YAML)?;
+            params_yaml::apply(&yaml, &mut machine)
+                .map_err(|e| InputError::at(display_name(p), &yaml, e.span, e.message, e.expected))?;
+        }
+        let text = input::read_text(&args.input, input::PROGRAM)?;
+        machine.parse(&text).map_err(|e| parse_error(&input_name, &text, &e))?;
+        let map = match &args.map {
+            Some(p) => Some(ColumnMap::load(p)?),
+            None => None,
+        };
+        let opts = import::Options {
+            format: args.format.as_deref().and_then(Format::from_name),
+            map: map.as_ref(),
+            lenient: args.lenient,
+        };
+        let importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
+        let axes = importer.meta().axes.clone();
+        let events: Vec<TraceEvent> = importer.collect::<Result<_, _>>().map_err(|e| import_error(&e))?;
+        let est = check::calibrate::estimate(&machine, &axes, &events);
+        let file = check::calibrate::params_file(&machine, &est, &display_name(&args.trace));
+        match &args.out {
+            Some(p) => std::fs::write(p, file)
+                .map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))?,
+            None => print!("{file}"),
+        }
+        Ok(())
+    };
+    match inner() {
+        Ok(()) => EXIT_OK,
+        Err(e) => {
+            e.report();
+            EXIT_INPUT
+        }
+    }
+}
+
+/// A progress line on a terminal (standard error) for a check that takes more than 2 s: the
+/// events read, their rate and the recorded time reached. Nothing when standard error is not a
+/// terminal, or for a short check.
+struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    name: String,
+    started: std::time::Instant,
+    n: u64,
+    tty: bool,
+}
+
+impl Progress {
+    fn new(name: &str) -> Progress {
+        use std::io::IsTerminal;
+        Progress {
+            bar: None,
+            name: name.to_string(),
+            started: std::time::Instant::now(),
+            n: 0,
+            tty: std::io::stderr().is_terminal(),
+        }
+    }
+
+    fn tick(&mut self, t_us: u64) {
+        self.n += 1;
+        if !self.tty || !self.n.is_multiple_of(65_536) {
+            return;
+        }
+        let secs = self.started.elapsed().as_secs_f64();
+        if self.bar.is_none() && secs >= 2.0 {
+            let bar = indicatif::ProgressBar::new_spinner();
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{spinner} {elapsed_precise} {msg}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+            );
+            self.bar = Some(bar);
+        }
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!(
+                "checking {}: {} events, {:.2} M/s, recorded {:.1} s",
+                self.name,
+                self.n,
+                self.n as f64 / secs / 1e6,
+                t_us as f64 / 1e6
+            ));
+            bar.tick();
+        }
+    }
+
+    fn done(&mut self) {
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+    }
 }

@@ -72,6 +72,9 @@ pub enum Command {
     /// Exits 0 when every scenario run passed (skipped ones aside), 1 when one failed, 2 for errors
     /// in the input (command line, scenario files, an adapter that cannot be started).
     Conform(conform::ConformArgs),
+    /// Estimate a machine's timing (axis rates and time constants, spindle ramp, PLC answer
+    /// delays) from a recording of a known-good run; write a parameter file (docs/checking.md).
+    Calibrate(check::CalibrateArgs),
     /// Serve the reference engine over the adapter protocol on stdin/stdout (for adapters that
     /// delegate to it, and for tests).
     #[command(hide = true)]
@@ -86,6 +89,7 @@ pub fn main() -> ExitCode {
         Command::Campaign(args) => ExitCode::from(campaign::run(&args)),
         Command::Check(args) => ExitCode::from(check::run(&args)),
         Command::Conform(args) => ExitCode::from(conform::run(&args)),
+        Command::Calibrate(args) => ExitCode::from(check::calibrate(&args)),
         Command::Serve => ExitCode::from(conform::serve()),
     }
 }

@@ -47,12 +47,21 @@ struct Run {
 #[derive(Debug, Default)]
 pub struct Reference {
     run: Option<Run>,
+    literal: bool,
 }
 
 impl Reference {
     /// A reference controller with nothing loaded.
     pub fn new() -> Self {
         Reference::default()
+    }
+
+    /// A reference controller that applies every input at its literal `t_us`, as a controller
+    /// that knows nothing of conditions does (only an input at the clock while stopped is tied
+    /// to the stopping event, as the protocol says): it must give the same trace as
+    /// [`Reference::new`], which holds `now_us` to the protocol's time semantics.
+    pub fn literal() -> Self {
+        Reference { run: None, literal: true }
     }
 
     fn loaded(&mut self) -> Result<&mut Run, ControllerError> {
@@ -87,8 +96,10 @@ impl Run {
         Ok(events)
     }
 
-    /// Index of the probe event for the `m`-th onset of `c` (None: it never begins to hold).
-    fn probe(&mut self, c: &Condition, m: u32) -> Option<usize> {
+    /// Index and time of the probe event for the `m`-th onset of `c` (None: it never begins to
+    /// hold). The probe acts at the onset's own time: the time of the event that made the
+    /// condition hold (an axis crossing's exact time).
+    fn probe(&mut self, c: &Condition, m: u32) -> Option<(usize, Micros)> {
         let mut opts = self.opts.clone();
         opts.inputs.inputs.push(ScheduledInput {
             trigger: Trigger::When { condition: c.clone(), occurrence: m, delay_us: 0 },
@@ -101,6 +112,7 @@ impl Run {
             .zip(&probed)
             .position(|(a, b)| a != b)
             .filter(|&i| matches!(&probed[i].event, Event::Input { name, .. } if name == "optional_stop"))
+            .map(|i| (i, probed[i].t_us))
     }
 
     fn onsets_of(&self, c: &Condition) -> u32 {
@@ -153,6 +165,7 @@ impl Controller for Reference {
     }
 
     fn input(&mut self, t_us: Micros, input: &Input) -> Result<(), ControllerError> {
+        let literal = self.literal;
         let run = self.loaded()?;
         if t_us < run.now {
             return Err(ControllerError::new(
@@ -161,8 +174,10 @@ impl Controller for Reference {
             ));
         }
         let trigger = match &run.stopped {
-            Some((c, m)) => Trigger::When { condition: c.clone(), occurrence: *m, delay_us: t_us - run.now },
-            None => Trigger::At(t_us),
+            Some((c, m)) if !literal || t_us == run.now => {
+                Trigger::When { condition: c.clone(), occurrence: *m, delay_us: t_us - run.now }
+            }
+            _ => Trigger::At(t_us),
         };
         run.opts.inputs.inputs.push(ScheduledInput { trigger, input: input.clone() });
         if let Some(old) = run.events.take() {
@@ -176,25 +191,26 @@ impl Controller for Reference {
         let produced = run.produced;
         let events = run.checked()?;
         // The earliest onset of a stop condition at or after the present position.
-        let mut best: Option<(usize, usize, u32)> = None;
+        let mut best: Option<(usize, Micros, usize, u32)> = None;
         for (k, c) in stop_on.iter().enumerate() {
             let m = run.onsets_of(c) + 1;
-            if let Some(p) = run.probe(c, m) {
-                if p >= produced && events[p].t_us < until_us && best.is_none_or(|(bp, _, _)| p < bp) {
-                    best = Some((p, k, m));
+            if let Some((p, t)) = run.probe(c, m) {
+                if p >= produced && t < until_us && best.is_none_or(|(bp, _, _, _)| p < bp) {
+                    best = Some((p, t, k, m));
                 }
             }
         }
         let end_at = events.iter().position(|e| e.t_us >= until_us).unwrap_or(events.len());
         let adv = match best {
-            Some((p, k, m)) => {
+            Some((p, t, k, m)) => {
                 let c = stop_on[k].clone();
                 match run.onsets.iter_mut().find(|(x, _)| *x == c) {
                     Some(slot) => slot.1 = m,
                     None => run.onsets.push((c.clone(), m)),
                 }
                 run.produced = p;
-                run.now = events[p].t_us;
+                // The onset's time, not that of the next event of the plain run (DEC-100).
+                run.now = t;
                 run.stopped = Some((c, m));
                 Advanced { now_us: run.now, stopped_on: Some(k), ended: false }
             }

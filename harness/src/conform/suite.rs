@@ -54,6 +54,7 @@ pub fn run_one(
     path: &Path,
     name: &str,
 ) -> Result<ScenarioVerdict, InputError> {
+    let started = std::time::Instant::now();
     let s = load::load(path, name)?;
     let dialect = s.machine.dialect.name();
     if !dialects.iter().any(|d| d == dialect) {
@@ -65,6 +66,7 @@ pub fn run_one(
             status: Status::Skipped(why),
             failures: Vec::new(),
             notes: Vec::new(),
+            seconds: 0.0,
         });
     }
     let side = path.with_extension("check.yaml");
@@ -76,10 +78,12 @@ pub fn run_one(
     };
     let job = drive::job_of(&s, program);
     let reference = s.machine.run_to_trace(&s.program, &s.opts);
-    Ok(match drive::drive(ctl, &s, &job, reference.meta.clone()) {
+    let mut v = match drive::drive(ctl, &s, &job, reference.meta.clone()) {
         Ok(driven) => judge(&s, &driven, &reference, &tolerances),
         Err(e) => ScenarioVerdict::controller_error(&s, &e),
-    })
+    };
+    v.seconds = started.elapsed().as_secs_f64();
+    Ok(v)
 }
 
 /// The outcome of a whole suite.
@@ -164,23 +168,29 @@ impl SuiteReport {
         out
     }
 
-    /// JUnit XML: one test case per scenario (classname: its directory), failures with rule ids.
+    /// JUnit XML: one test case per scenario (classname: its directory, `time`: its seconds),
+    /// failures with rule ids; a scenario failed by the controller itself (timeout, crash,
+    /// protocol) is an `<error>` and counted in `errors`, not in `failures`.
     pub fn junit(&self) -> String {
         let (_, f, s) = self.counts();
+        let errors = self.scenarios.iter().filter(|v| v.errored()).count();
+        let time: f64 = self.scenarios.iter().map(|v| v.seconds).sum();
         let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
         let _ = writeln!(
             out,
-            "<testsuites>\n  <testsuite name=\"{}\" tests=\"{}\" failures=\"{f}\" skipped=\"{s}\">",
+            "<testsuites tests=\"{n}\" failures=\"{fl}\" errors=\"{errors}\" skipped=\"{s}\" time=\"{time:.3}\">\n  <testsuite name=\"{}\" tests=\"{n}\" failures=\"{fl}\" errors=\"{errors}\" skipped=\"{s}\" time=\"{time:.3}\">",
             xml_escape(&format!("nc-conform conform: {}", self.controller)),
-            self.scenarios.len()
+            n = self.scenarios.len(),
+            fl = f - errors,
         );
         for v in &self.scenarios {
             let class = v.name.rsplit_once('/').map_or("scenarios", |(d, _)| d);
             let _ = write!(
                 out,
-                "    <testcase classname=\"{}\" name=\"{}\"",
+                "    <testcase classname=\"{}\" name=\"{}\" time=\"{:.3}\"",
                 xml_escape(class),
-                xml_escape(&v.name)
+                xml_escape(&v.name),
+                v.seconds
             );
             match &v.status {
                 Status::Passed => out.push_str("/>\n"),
@@ -191,9 +201,10 @@ impl SuiteReport {
                 Status::Failed => {
                     let mut rules: Vec<&str> = v.failures.iter().map(|f| f.rule.as_str()).collect();
                     rules.dedup();
+                    let tag = if v.errored() { "error" } else { "failure" };
                     let _ = writeln!(
                         out,
-                        ">\n      <failure message=\"{}\">{}</failure>\n    </testcase>",
+                        ">\n      <{tag} message=\"{}\">{}</{tag}>\n    </testcase>",
                         xml_escape(&format!("{}: {}", rules.join(", "), v.title)),
                         xml_escape(&v.failure_text())
                     );

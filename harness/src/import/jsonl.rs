@@ -474,6 +474,17 @@ impl Source for JsonlSource {
             if self.buf.iter().all(u8::is_ascii_whitespace) {
                 continue;
             }
+            // The sample line as `nc-conform run` writes it, read without building a JSON value;
+            // any other form (or any fault) goes through the full check below.
+            if !self.ended {
+                if let Some((t_us, s)) = fast_sample(&self.buf, &self.axes) {
+                    if t_us >= self.last_t {
+                        self.last_t = t_us;
+                        out.push_back(TraceEvent { t_us, event: Event::Sample(s) });
+                        return Ok(true);
+                    }
+                }
+            }
             let buf = std::mem::take(&mut self.buf);
             let res = parse(ctx, no, &buf).and_then(|l| {
                 if self.ended {
@@ -495,4 +506,78 @@ impl Source for JsonlSource {
             }
         }
     }
+}
+
+/// Reads `lit` at `*i`.
+fn lit(b: &[u8], i: &mut usize, lit: &[u8]) -> Option<()> {
+    if b.get(*i..*i + lit.len())? == lit {
+        *i += lit.len();
+        Some(())
+    } else {
+        None
+    }
+}
+
+/// A JSON number at `*i` in plain decimal form (`-12.345`, no exponent) as fixed point.
+fn number(b: &[u8], i: &mut usize, decimals: u32) -> Option<i64> {
+    let start = *i;
+    if b.get(*i) == Some(&b'-') {
+        *i += 1;
+    }
+    let digits = *i;
+    while b.get(*i).is_some_and(u8::is_ascii_digit) {
+        *i += 1;
+    }
+    if *i == digits || (b[digits] == b'0' && *i > digits + 1) {
+        return None; // no digits, or a leading zero JSON does not allow
+    }
+    if b.get(*i) == Some(&b'.') {
+        *i += 1;
+        let f = *i;
+        while b.get(*i).is_some_and(u8::is_ascii_digit) {
+            *i += 1;
+        }
+        if *i == f {
+            return None;
+        }
+    }
+    if matches!(b.get(*i), Some(b'e' | b'E')) {
+        return None;
+    }
+    decimal_to_fixed(std::str::from_utf8(&b[start..*i]).ok()?, decimals)
+}
+
+/// A sample line exactly as `nc-conform run` writes it: `{"t_us":T,"kind":"sample","axes":{…
+/// every axis of the meta in its order…},"spindle":{"rpm":R,"angle_deg":A}}` (a trailing `\r`
+/// allowed). None for any other form: the full parser then reads (and judges) it.
+pub(crate) fn fast_sample(b: &[u8], axes: &[AxisSpec]) -> Option<(u64, Sample)> {
+    let b = b.strip_suffix(b"\r").unwrap_or(b);
+    let mut i = 0;
+    lit(b, &mut i, b"{\"t_us\":")?;
+    let t0 = i;
+    while b.get(i).is_some_and(u8::is_ascii_digit) {
+        i += 1;
+    }
+    if i == t0 || (b[t0] == b'0' && i > t0 + 1) || i - t0 > 19 {
+        return None;
+    }
+    let t_us: u64 = std::str::from_utf8(&b[t0..i]).ok()?.parse().ok()?;
+    lit(b, &mut i, b",\"kind\":\"sample\",\"axes\":{")?;
+    let mut s = Sample::default();
+    for (k, a) in axes.iter().enumerate() {
+        if k > 0 {
+            lit(b, &mut i, b",")?;
+        }
+        lit(b, &mut i, b"\"")?;
+        let mut l = [0u8; 4];
+        lit(b, &mut i, a.letter.encode_utf8(&mut l).as_bytes())?;
+        lit(b, &mut i, b"\":")?;
+        s.axes[a.index] = number(b, &mut i, 6)?;
+    }
+    lit(b, &mut i, b"},\"spindle\":{\"rpm\":")?;
+    s.spindle_mrpm = number(b, &mut i, 3)?;
+    lit(b, &mut i, b",\"angle_deg\":")?;
+    s.spindle_mdeg = number(b, &mut i, 3)?;
+    lit(b, &mut i, b"}}")?;
+    (i == b.len()).then_some((t_us, s))
 }

@@ -517,3 +517,44 @@ fn alarms_of_unknown_vendor_codes_import_with_their_code() {
     let a = a.unwrap_or_else(|| panic!("{res:?} {evs:?}"));
     assert_eq!(super::vendor_code(&a), Some("SV0401"));
 }
+
+/// The JSON Lines fast path reads a written sample line exactly as the full parser does, and
+/// leaves every other form to it.
+#[test]
+fn jsonl_fast_sample_path_agrees_with_the_full_parser() {
+    let head = "{\"t_us\":0,\"kind\":\"meta\",\"dialect\":\"gsk-lathe\",\"axes\":[\"X\",\"Z\",\"C\"],\"diameter\":[\"X\"],\"period_us\":1000,\"sample_us\":1000,\"format\":\"nc-conform-trace/1\"}\n";
+    let lines = [
+        "{\"t_us\":1000,\"kind\":\"sample\",\"axes\":{\"X\":38.008412,\"Z\":-0.000001,\"C\":0},\"spindle\":{\"rpm\":-1200.5,\"angle_deg\":359.999}}",
+        "{\"t_us\":2000,\"kind\":\"sample\",\"axes\":{\"Z\":1,\"X\":2,\"C\":3},\"spindle\":{\"rpm\":0,\"angle_deg\":0}}",
+        "{\"t_us\":3000,\"kind\":\"sample\",\"axes\":{\"X\":-0,\"Z\":12345.5,\"C\":0},\"spindle\":{\"rpm\":1,\"angle_deg\":0.5}}\r",
+    ];
+    let text = format!(
+        "{head}{}\n{{\"t_us\":3000,\"kind\":\"signal\",\"name\":\"STL\",\"value\":1}}\n",
+        lines.join("\n")
+    );
+    let opts = Options { format: None, map: None, lenient: true };
+    let events: Vec<_> = from_reader("t.jsonl", Box::new(std::io::Cursor::new(text.into_bytes())), &opts)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .collect();
+    let samples: Vec<_> = events.iter().filter(|e| matches!(e.event, Event::Sample(_))).collect();
+    assert_eq!(samples.len(), 3);
+    let Event::Sample(s) = &samples[0].event else { unreachable!() };
+    assert_eq!((s.axes[0], s.axes[2], s.spindle_mrpm, s.spindle_mdeg), (38_008_412, -1, -1_200_500, 359_999));
+    let Event::Sample(s) = &samples[1].event else { unreachable!() };
+    assert_eq!((s.axes[0], s.axes[2]), (2_000_000, 1_000_000), "another key order: the full parser");
+    // Forms the fast path leaves to the full parser.
+    let axes = [
+        nc_engine::trace::AxisSpec { letter: 'X', index: 0, diameter: true, rotary: false },
+        nc_engine::trace::AxisSpec { letter: 'Z', index: 2, diameter: false, rotary: false },
+    ];
+    for bad in [
+        "{\"t_us\":01,\"kind\":\"sample\",\"axes\":{\"X\":1,\"Z\":1},\"spindle\":{\"rpm\":0,\"angle_deg\":0}}",
+        "{\"t_us\":1,\"kind\":\"sample\",\"axes\":{\"X\":1e-6,\"Z\":1},\"spindle\":{\"rpm\":0,\"angle_deg\":0}}",
+        "{\"t_us\":1,\"kind\":\"sample\",\"axes\":{\"X\":1,\"Z\":1},\"spindle\":{\"rpm\":0,\"angle_deg\":0}} ",
+        "{\"t_us\":1,\"kind\":\"sample\",\"axes\":{\"X\":1.,\"Z\":1},\"spindle\":{\"rpm\":0,\"angle_deg\":0}}",
+        "{\"t_us\":1,\"kind\":\"sample\",\"axes\":{\"X\":1},\"spindle\":{\"rpm\":0,\"angle_deg\":0}}",
+    ] {
+        assert_eq!(super::jsonl::fast_sample(bad.as_bytes(), &axes), None, "{bad}");
+    }
+}

@@ -49,6 +49,9 @@ pub struct Rec {
     pub drop_one_in: u64,
     /// Discrete events rounded up to this scan period (0: exact).
     pub scan_us: u64,
+    /// Discrete events later still by this (a PLC's scan plus its export latency): with
+    /// `scan_us` = 6 ms and `late_us` = 2 ms every edge comes 2–8 ms late, in its order.
+    pub late_us: u64,
 }
 
 impl Rec {
@@ -61,6 +64,7 @@ impl Rec {
         noise_mdeg: 0,
         drop_one_in: 0,
         scan_us: 0,
+        late_us: 0,
     };
     /// A realistic recorder: another clock, 4 ms samples with ± 300 µs jitter, 1 µm and 0.05°
     /// noise, one sample in 40 lost, a 1 ms PLC scan.
@@ -72,7 +76,11 @@ impl Rec {
         noise_mdeg: 50,
         drop_one_in: 40,
         scan_us: 1000,
+        late_us: 0,
     };
+    /// A PLC-scan recorder: as [`Rec::REALISTIC`], but every edge, function and alarm 2–8 ms
+    /// late (a 6 ms scan and 2 ms of latency).
+    pub const PLC_SCAN: Rec = Rec { scan_us: 6000, late_us: 2000, ..Rec::REALISTIC };
 }
 
 /// A small deterministic generator.
@@ -125,6 +133,7 @@ pub fn record(trace: &Trace, rec: Rec) -> Vec<TraceEvent> {
             | Event::End(_) => {}
             _ => {
                 let t = if rec.scan_us > 0 { e.t_us.div_ceil(rec.scan_us) * rec.scan_us } else { e.t_us };
+                let t = t + rec.late_us;
                 out.push((
                     t + rec.shift_us,
                     1,

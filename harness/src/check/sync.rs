@@ -1,0 +1,377 @@
+//! Synchronisation of an axis with the spindle (`CHK-SYNC-01`), during every synchronised move of
+//! the reference: rigid-tapping strokes (RGSPP/RGSPM on in the reference), thread passes (G32,
+//! G92, G92.3, G76, G33, cycle 832) and moves that follow the spindle's encoder (KND G93,
+//! LinuxCNC G33.1).
+//!
+//! The windows come from the **reference** (its stroke signals, its blocks and phases), never
+//! from the recording: a stroke-end edge recorded late (a PLC scan) does not stretch a stroke
+//! over the rapid that follows it, and a recording without stroke signals (LinuxCNC, a CSV of
+//! positions) is still compared.
+//!
+//! At each recorded sample inside a window, the reference's time is found at which its window
+//! axis stood where the recorded axis stands (the crossing nearest in time, within the event
+//! window); the recorded spindle angle is compared with the reference's angle there, and the
+//! difference turned into mm along the axis with the reference's local lead. That is the
+//! position the axis has at the recorded angle: it measures the lead (its drift from the
+//! window's first compared sample) and, where the reference starts its pass at a set angle
+//! after the index (G92.3, cycle 832), the start angle too (the error itself), whatever the
+//! clocks and sample times.
+
+use nc_engine::trace::{Event, Phase, Signal, Signals, Trace};
+
+use super::reference::{unwrap_delta, Reference};
+
+/// What kind of synchronised move a window is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// A rigid-tapping stroke (RGSPP or RGSPM on).
+    Stroke,
+    /// A thread pass (feed locked to the spindle).
+    Thread,
+    /// A move following the spindle's encoder (KND G93, LinuxCNC G33.1).
+    Follow,
+}
+
+impl Kind {
+    /// As text.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Stroke => "rigid tapping stroke",
+            Kind::Thread => "thread pass",
+            Kind::Follow => "synchronised move",
+        }
+    }
+}
+
+/// One synchronised move of the reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Window {
+    /// Start and end, reference time.
+    pub t0: i64,
+    /// End.
+    pub t1: i64,
+    /// The axis locked to the spindle (the one that travels furthest).
+    pub slot: usize,
+    /// 2 for an axis reported as a diameter.
+    pub div: f64,
+    /// The kind.
+    pub kind: Kind,
+    /// The reference starts it at a set angle after the index: the angle itself is compared,
+    /// not only the lead.
+    pub locked: bool,
+    /// Its number among the windows of its kind (1-based).
+    pub n: usize,
+    /// The G code of the block it belongs to (None: a rigid stroke, a Klartext cycle).
+    pub code: Option<&'static str>,
+    /// The reference's position of its axis at its start and end, nm.
+    pub ends: [f64; 2],
+}
+
+/// The G codes of a dialect that lock the feed to the spindle: (threads, followers, the ones
+/// that start at a set angle after the index).
+fn sync_codes(dialect: &str) -> (&'static [&'static str], &'static [&'static str], &'static [&'static str]) {
+    match dialect {
+        "gsk-lathe" => (&["G32", "G92", "G92.3", "G76", "G33"], &[], &["G92.3"]),
+        "knd-lathe" => (&["G32", "G92", "G76"], &["G93"], &[]),
+        "linuxcnc" => (&["G33", "G76"], &["G33.1"], &[]),
+        _ => (&[], &[], &[]),
+    }
+}
+
+/// The motion-group G codes of a block's text (a later one wins), upper case, comments out.
+fn motion_code(text: &str, lathe: bool) -> Option<String> {
+    let mut out = None;
+    let mut depth = 0;
+    let up = text.to_ascii_uppercase();
+    let b = up.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'(' => depth += 1,
+            b')' => depth -= 1,
+            b';' if depth == 0 => break,
+            b'G' if depth == 0 => {
+                let j =
+                    (i + 1..b.len()).find(|&k| !(b[k].is_ascii_digit() || b[k] == b'.')).unwrap_or(b.len());
+                if let Ok(v) = up[i + 1..j].parse::<f64>() {
+                    let code = format!("G{}", up[i + 1..j].trim_start_matches('0'));
+                    let code = if code == "G" || code.starts_with("G.") {
+                        format!("G0{}", &code[1..])
+                    } else {
+                        code
+                    };
+                    let motion = matches!(v as u32, 0..=3 | 32..=34 | 73..=89 | 92 | 93)
+                        || (lathe && matches!(v as u32, 90 | 94));
+                    if motion && (v != 92.0 || lathe) {
+                        out = Some(code);
+                    }
+                }
+                i = j;
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The value of the first word `letter` in a block's text (comments out).
+fn word(text: &str, letter: char) -> Option<f64> {
+    let up = text.to_ascii_uppercase();
+    let up = up.split(';').next().unwrap_or("");
+    let mut depth = 0;
+    let b = up.as_bytes();
+    for (i, &c) in b.iter().enumerate() {
+        match c {
+            b'(' => depth += 1,
+            b')' => depth -= 1,
+            c if depth == 0 && c == letter as u8 => {
+                let j = (i + 1..b.len())
+                    .find(|&k| !(b[k].is_ascii_digit() || b[k] == b'.' || b[k] == b'-'))
+                    .unwrap_or(b.len());
+                return up[i + 1..j].parse().ok();
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// The parts of [t0, t1] where the reference's furthest-travelling axis advances `lead_mm` per
+/// spindle revolution (within 3 %, the axis moving): a thread block's synchronised moves when the
+/// reference marks no phases in it (the rapids in and back are left out).
+fn by_lead(r: &Reference, t0: i64, t1: i64, lead_mm: f64) -> Vec<(i64, i64)> {
+    let Some(slot) = r.furthest_axis(t0, t1) else { return Vec::new() };
+    let div = if r.axes().iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
+    let want = lead_mm * 1e6;
+    let i0 = r.t.partition_point(|&x| x < t0);
+    let i1 = r.t.partition_point(|&x| x <= t1);
+    let mut out: Vec<(i64, i64)> = Vec::new();
+    let mut from: Option<i64> = None;
+    for i in i0..i1.saturating_sub(1) {
+        let dp = (r.s[i + 1].axes[slot] - r.s[i].axes[slot]).abs() as f64 / div;
+        let dr = (r.cum_mdeg[i + 1] - r.cum_mdeg[i]).abs() / 360_000.0;
+        let locked = dp > 100.0 && dr > 1e-6 && ((dp / dr) - want).abs() <= 0.03 * want;
+        match (locked, from) {
+            (true, None) => from = Some(r.t[i]),
+            (false, Some(a)) => {
+                out.push((a, r.t[i]));
+                from = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = from {
+        out.push((a, r.t[i1.saturating_sub(1).max(i0)]));
+    }
+    out.retain(|w| w.1 - w.0 >= 20_000);
+    out
+}
+
+/// The synchronised moves of `r`, in time order.
+pub fn windows(r: &Reference) -> Vec<Window> {
+    let trace: &Trace = r.trace;
+    let dialect = trace.meta.dialect.to_string();
+    let lathe = dialect.contains("lathe");
+    let heidenhain = dialect == "heidenhain";
+    let (threads, follows, locked) = sync_codes(&dialect);
+    let mut raw: Vec<(i64, i64, Kind, bool, Option<&'static str>)> = Vec::new();
+    let mut sig = Signals::default();
+    let mut stroke_from: Option<i64> = None;
+    let mut code: Option<String> = None;
+    let mut open: Option<(i64, Kind, bool, Option<&'static str>)> = None;
+    let mut block: Option<(i64, &'static str, f64)> = None;
+    let mut phased = false;
+    let mut feed: Option<f64> = None;
+    for e in &trace.events {
+        let t = e.t_us as i64;
+        match &e.event {
+            Event::Signal { signal, value } if matches!(signal, Signal::Rgspp | Signal::Rgspm) => {
+                sig.set(*signal, *value);
+                let on = sig.get(Signal::Rgspp) || sig.get(Signal::Rgspm);
+                match (on, stroke_from) {
+                    (true, None) => stroke_from = Some(t),
+                    (false, Some(a)) => {
+                        raw.push((a, t, Kind::Stroke, false, None));
+                        stroke_from = None;
+                    }
+                    _ => {}
+                }
+            }
+            Event::Block { text, .. } => {
+                // A thread block that ran without phase events (KND G32/G92): its synchronised
+                // parts are found by their lead.
+                if let Some((b0, g, f)) = block.take() {
+                    if !phased {
+                        raw.extend(
+                            by_lead(r, b0, t, f)
+                                .into_iter()
+                                .map(|(a, b)| (a, b, Kind::Thread, false, Some(g))),
+                        );
+                    }
+                }
+                if let Some(c) = motion_code(text, lathe) {
+                    code = Some(c);
+                }
+                if let Some(v) = word(text, 'F') {
+                    feed = Some(v);
+                }
+                let c = code.as_deref().unwrap_or("");
+                block = threads.iter().find(|x| **x == c).zip(feed).map(|(g, f)| (t, *g, f));
+                phased = false;
+            }
+            Event::Phase(p) => {
+                phased = true;
+                if let Some((a, k, l, g)) = open.take() {
+                    raw.push((a, t, k, l, g));
+                }
+                let c = code.as_deref().unwrap_or("");
+                let g = threads.iter().chain(follows).find(|x| **x == c).copied();
+                let kind = if heidenhain && *p == Phase::Cutting {
+                    Some((Kind::Thread, true))
+                } else if follows.contains(&c) && matches!(p, Phase::Cutting | Phase::Retract) {
+                    Some((Kind::Follow, false))
+                } else if threads.contains(&c) && *p == Phase::Cutting {
+                    Some((Kind::Thread, locked.contains(&c)))
+                } else {
+                    None
+                };
+                open = kind.map(|(k, l)| (t, k, l, g));
+            }
+            _ => {}
+        }
+    }
+    if let Some((a, k, l, g)) = open {
+        raw.push((a, r.end_us, k, l, g));
+    }
+    if let Some((b0, g, f)) = block.filter(|_| !phased) {
+        raw.extend(
+            by_lead(r, b0, r.end_us, f).into_iter().map(|(a, b)| (a, b, Kind::Thread, false, Some(g))),
+        );
+    }
+    if let Some(a) = stroke_from {
+        raw.push((a, r.end_us, Kind::Stroke, false, None));
+    }
+    raw.sort_by_key(|w| w.0);
+    let mut counts = [0usize; 3];
+    let mut out = Vec::new();
+    for (t0, t1, kind, locked, code) in raw {
+        let slot = match kind {
+            Kind::Stroke => match r.tap {
+                Some(tap) => tap.slot,
+                None => continue,
+            },
+            _ => match r.furthest_axis(t0, t1) {
+                Some(s) => s,
+                None => continue,
+            },
+        };
+        let div = if r.axes().iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
+        let k = kind as usize;
+        counts[k] += 1;
+        let ends = [r.pos_at(t0, slot).unwrap_or(0.0), r.pos_at(t1, slot).unwrap_or(0.0)];
+        out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k], code, ends });
+    }
+    out
+}
+
+/// The synchronisation error at one recorded sample, nm along the axis (physical: a diameter
+/// axis as a radius): recorded position − the reference's position at the recorded angle.
+/// None where it cannot be told (no crossing near, the axis or the spindle standing, the axis
+/// within `still_nm` of where the reference's move starts or ends: a recorded axis still waiting
+/// there, for the index or a late edge, tells nothing of the lead).
+pub fn error_at(
+    r: &Reference,
+    w: &Window,
+    t: i64,
+    pos: i64,
+    angle_mdeg: i64,
+    slack_us: i64,
+    still_nm: i64,
+) -> Option<f64> {
+    let lo = (t - slack_us).max(w.t0);
+    let hi = (t + slack_us).min(w.t1);
+    if lo >= hi {
+        return None;
+    }
+    if w.ends.iter().any(|&e| (pos as f64 - e).abs() <= still_nm as f64) {
+        return None;
+    }
+    let i0 = r.t.partition_point(|&x| x < lo);
+    let i1 = r.t.partition_point(|&x| x <= hi);
+    // Segments outward from the one at `t`; the crossing nearest in time wins (both sides of a
+    // ring are looked at before stopping).
+    let seg = |i: usize| -> Option<(i64, usize, f64)> {
+        let (a, b) = (r.s[i].axes[w.slot], r.s[i + 1].axes[w.slot]);
+        if (a - pos).signum() * (b - pos).signum() > 0 || (b - a).abs() < 100 {
+            return None;
+        }
+        let f = (pos - a) as f64 / (b - a) as f64;
+        Some((r.t[i] + (f * (r.t[i + 1] - r.t[i]) as f64) as i64, i, f))
+    };
+    let last = i1.saturating_sub(1);
+    let mid = r.t.partition_point(|&x| x <= t).saturating_sub(1).clamp(i0, last.max(i0));
+    let mut best: Option<(i64, usize, f64)> = None;
+    for d in 0..=(last.saturating_sub(i0)) {
+        for i in [mid.checked_add(d), mid.checked_sub(d + 1)].into_iter().flatten() {
+            if i < i0 || i >= last {
+                continue;
+            }
+            if let Some(c) = seg(i) {
+                if best.is_none_or(|(bt, _, _)| (c.0 - t).abs() < (bt - t).abs()) {
+                    best = Some(c);
+                }
+            }
+        }
+        if best.is_some() {
+            break;
+        }
+    }
+    let (_, i, f) = best?;
+    let d_ang = r.cum_mdeg[i + 1] - r.cum_mdeg[i];
+    if d_ang.abs() < 1.0 {
+        return None;
+    }
+    let lead_nm_per_mdeg = (r.s[i + 1].axes[w.slot] - r.s[i].axes[w.slot]) as f64 / d_ang;
+    let ref_angle = (r.cum_mdeg[i] + f * d_ang).rem_euclid(360_000.0);
+    let mut delta = (angle_mdeg as f64 - ref_angle).rem_euclid(360_000.0);
+    if delta > 180_000.0 {
+        delta -= 360_000.0;
+    }
+    Some(-delta * lead_nm_per_mdeg / w.div)
+}
+
+/// The cumulative unwrapped spindle angle at each reference sample, milli-degrees.
+pub fn cumulative_angle(r_t: &[i64], r_s: &[nc_engine::trace::Sample]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(r_s.len());
+    let mut acc = r_s.first().map_or(0.0, |s| s.spindle_mdeg as f64);
+    for (k, s) in r_s.iter().enumerate() {
+        if k > 0 {
+            let p = &r_s[k - 1];
+            acc += unwrap_delta(
+                p.spindle_mdeg,
+                p.spindle_mrpm,
+                s.spindle_mdeg,
+                s.spindle_mrpm,
+                r_t[k] - r_t[k - 1],
+            );
+        }
+        out.push(acc);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn motion_codes_are_read_from_block_text() {
+        assert_eq!(motion_code("G92.3 X36 Z-20 F4", true).as_deref(), Some("G92.3"));
+        assert_eq!(motion_code("g33.1 z-10 k1.5 (g0 in a comment)", false).as_deref(), Some("G33.1"));
+        assert_eq!(motion_code("G98 G21 X5", true), None);
+        assert_eq!(motion_code("G92 X0 Y0", false), None, "Fanuc G92 sets coordinates");
+        assert_eq!(motion_code("G00 X1 ; G32", true).as_deref(), Some("G0"));
+    }
+}
