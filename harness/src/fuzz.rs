@@ -73,7 +73,7 @@ pub fn gcode(data: &[u8]) {
             Err(e) => {
                 assert!(e.line >= 1 && e.col >= 1, "dialect {name}: parse error without a location: {e:?}");
                 assert!(!e.message.is_empty(), "dialect {name}: parse error without a message: {e:?}");
-                let diag = crate::cli::parse_error("fuzz.nc", &text, &e);
+                let diag = crate::diag::parse_error("fuzz.nc", &text, &e);
                 let plain = diag.render_plain();
                 assert!(
                     plain.contains("fuzz.nc:"),

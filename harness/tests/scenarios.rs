@@ -44,7 +44,7 @@ fn check(path: &Path, rel: &str) -> Result<(), Failed> {
     // A scenario that expects a refusal snapshots the diagnostic the user would see instead.
     let events = match &s.refusal {
         Some((Some(e), _, text)) => {
-            nc_conform::cli::parse_error(&format!("{rel} (program)"), text, e).render_plain()
+            nc_conform::diag::parse_error(&format!("{rel} (program)"), text, e).render_plain()
         }
         Some((None, _, _)) => "the program parsed\n".to_string(),
         None => event_listing(&outcome.trace),

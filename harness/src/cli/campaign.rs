@@ -9,9 +9,9 @@ use std::path::PathBuf;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::{EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::campaign::properties::{self, Property};
 use crate::campaign::Stats;
-use crate::cli::{EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 
 /// Arguments of `nc-conform campaign`.
 #[derive(Debug, Args)]
