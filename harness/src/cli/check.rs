@@ -252,7 +252,9 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
     });
     let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
-    let rep = check::check(&reference, stream.map(|e: TraceEvent| e), &spec);
+    let mut progress = super::progress::Progress::new("check");
+    let rep = check::check(&reference, stream.inspect(|e: &TraceEvent| progress.tick(e.t_us)), &spec);
+    progress.done();
     if let Some(e) = failure {
         return Err(import_error(&e));
     }
