@@ -22,7 +22,26 @@ fn bench(c: &mut Criterion) {
             w.finish().unwrap()
         })
     });
+    // The engine alone (events dropped): the writer's own cost is the difference.
+    g.bench_function("gsk_g88_peck_1ms_samples_engine_only", |b| {
+        b.iter(|| {
+            let mut n = 0u64;
+            let mut sink = |_: &nc_engine::trace::TraceEvent| n += 1;
+            m.run(&prog, &opts, &mut Count(&mut sink));
+            n
+        })
+    });
     g.finish();
+}
+
+/// A sink that hands every event to a closure.
+struct Count<'a>(&'a mut dyn FnMut(&nc_engine::trace::TraceEvent));
+
+impl nc_engine::trace::TraceSink for Count<'_> {
+    fn start(&mut self, _: &nc_engine::trace::TraceMeta) {}
+    fn event(&mut self, ev: &nc_engine::trace::TraceEvent) {
+        (self.0)(ev);
+    }
 }
 
 criterion_group!(run, bench);

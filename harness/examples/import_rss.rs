@@ -7,7 +7,10 @@
 //! /usr/bin/time -v target/release/examples/import_rss 36000000   # ten hours: same peak
 //! ```
 //!
-//! With a file argument after N (`import_rss 0 FILE.csv MAP.yaml`) it imports that file instead.
+//! With a file argument after N (`import_rss 0 FILE.csv MAP.yaml`, `import_rss 0 FILE.jsonl`) it
+//! imports that file instead; `import_rss N jsonl` imports N generated JSON Lines samples;
+//! `import_rss write-csv N FILE` and `import_rss write-jsonl N FILE` write the generated
+//! recordings to FILE (the 10 M-row figures of `docs/checking.md`).
 
 use std::time::Instant;
 
@@ -15,9 +18,22 @@ use nc_conform::import::{from_reader, gen, open, ColumnMap, Options};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if let (Some(what @ ("write-csv" | "write-jsonl")), Some(n), Some(file)) =
+        (args.get(1).map(String::as_str), args.get(2).and_then(|a| a.parse().ok()), args.get(3))
+    {
+        let mut src: Box<dyn std::io::Read> =
+            if what == "write-csv" { Box::new(gen::GenCsv::new(n)) } else { Box::new(gen::GenJsonl::new(n)) };
+        let mut out = std::io::BufWriter::new(std::fs::File::create(file).expect("creates FILE"));
+        std::io::copy(&mut src, &mut out).expect("writes FILE");
+        return;
+    }
     let rows: u64 = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(3_600_000);
     let start = Instant::now();
-    let imp = if let (Some(file), Some(map)) = (args.get(2), args.get(3)) {
+    let imp = if args.get(2).is_some_and(|a| a == "jsonl") {
+        from_reader("gen.jsonl", Box::new(gen::GenJsonl::new(rows)), &Options::default())
+    } else if let (Some(file), None) = (args.get(2), args.get(3)) {
+        open(std::path::Path::new(file), &Options::default())
+    } else if let (Some(file), Some(map)) = (args.get(2), args.get(3)) {
         let map = ColumnMap::load(std::path::Path::new(map)).unwrap_or_else(|e| {
             e.report();
             std::process::exit(2)

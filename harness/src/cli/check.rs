@@ -229,10 +229,8 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     // MAX_RECORDED_EVENTS of them (docs/input-limits.md).
     let mut discrete = 0usize;
     let trace_name = display_name(&args.trace);
-    let mut progress = Progress::new(&display_name(&args.trace));
     let stream = std::iter::from_fn(|| match importer.next()? {
         Ok(ev) => {
-            progress.tick(ev.t_us);
             if !matches!(ev.event, Event::Sample(_)) {
                 discrete += 1;
                 if discrete > MAX_RECORDED_EVENTS {
@@ -257,7 +255,8 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
     });
     let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
-    let rep = check::check(&reference, stream.map(|e: TraceEvent| e), &spec);
+    let mut progress = super::progress::Progress::new("check");
+    let rep = check::check(&reference, stream.inspect(|e: &TraceEvent| progress.tick(e.t_us)), &spec);
     progress.done();
     if let Some(e) = failure {
         return Err(import_error(&e));
@@ -360,62 +359,6 @@ pub fn calibrate(args: &CalibrateArgs) -> u8 {
         Err(e) => {
             e.report();
             EXIT_INPUT
-        }
-    }
-}
-
-/// A progress line on a terminal (standard error) for a check that takes more than 2 s: the
-/// events read, their rate and the recorded time reached. Nothing when standard error is not a
-/// terminal, or for a short check.
-struct Progress {
-    bar: Option<indicatif::ProgressBar>,
-    name: String,
-    started: std::time::Instant,
-    n: u64,
-    tty: bool,
-}
-
-impl Progress {
-    fn new(name: &str) -> Progress {
-        use std::io::IsTerminal;
-        Progress {
-            bar: None,
-            name: name.to_string(),
-            started: std::time::Instant::now(),
-            n: 0,
-            tty: std::io::stderr().is_terminal(),
-        }
-    }
-
-    fn tick(&mut self, t_us: u64) {
-        self.n += 1;
-        if !self.tty || !self.n.is_multiple_of(65_536) {
-            return;
-        }
-        let secs = self.started.elapsed().as_secs_f64();
-        if self.bar.is_none() && secs >= 2.0 {
-            let bar = indicatif::ProgressBar::new_spinner();
-            bar.set_style(
-                indicatif::ProgressStyle::with_template("{spinner} {elapsed_precise} {msg}")
-                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-            );
-            self.bar = Some(bar);
-        }
-        if let Some(bar) = &self.bar {
-            bar.set_message(format!(
-                "checking {}: {} events, {:.2} M/s, recorded {:.1} s",
-                self.name,
-                self.n,
-                self.n as f64 / secs / 1e6,
-                t_us as f64 / 1e6
-            ));
-            bar.tick();
-        }
-    }
-
-    fn done(&mut self) {
-        if let Some(bar) = self.bar.take() {
-            bar.finish_and_clear();
         }
     }
 }

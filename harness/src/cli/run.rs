@@ -138,8 +138,10 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
         ..RunOptions::default()
     };
     let budget = args.max_output_mib.checked_mul(1024 * 1024).filter(|b| *b > 0).unwrap_or(u64::MAX);
-    let mut writer = FirstAlarm::new(JsonlWriter::new(Digest::new(Some(sink))).with_budget(budget));
+    let writer = FirstAlarm::new(JsonlWriter::new(Digest::new(Some(sink))).with_budget(budget));
+    let mut writer = super::progress::Watched::new("run", writer);
     machine.run(&program, &opts, &mut writer);
+    let writer = writer.done();
     let (writer, alarm) = (writer.inner, writer.alarm);
     let end = writer.end_reason().cloned();
     if let Some(why) = why_not_ended(end.as_ref(), alarm.as_ref(), &program_name, &text, args) {

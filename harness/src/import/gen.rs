@@ -100,3 +100,107 @@ impl BufRead for GenCsv {
         self.pos = (self.pos + n).min(self.buf.len());
     }
 }
+
+/// A stream of a generated JSON Lines trace (`nc-conform-trace/1`, gsk-lathe axes X and Z):
+/// the meta line, `rows` samples at 1 kHz with a signal line every 50 samples, and the end line,
+/// written by [`crate::jsonl::JsonlWriter`] a chunk at a time (never held whole).
+#[derive(Debug)]
+pub struct GenJsonl {
+    row: u64,
+    rows: u64,
+    buf: Vec<u8>,
+    pos: usize,
+    started: bool,
+    ended: bool,
+}
+
+impl GenJsonl {
+    /// `rows` sample lines between the meta and the end line.
+    pub fn new(rows: u64) -> Self {
+        GenJsonl { row: 0, rows, buf: Vec::with_capacity(80 * 1024), pos: 0, started: false, ended: false }
+    }
+
+    fn meta() -> nc_engine::trace::TraceMeta {
+        use nc_engine::trace::{AxisSpec, TraceMeta};
+        let axis = |letter, index, diameter| AxisSpec { letter, index, diameter, rotary: false };
+        TraceMeta {
+            dialect: "gsk-lathe",
+            axes: vec![axis('X', 0, true), axis('Z', 2, false)],
+            period_us: 1000,
+            sample_us: 1000,
+        }
+    }
+
+    fn refill(&mut self) {
+        use nc_engine::trace::{EndReason, EndSummary, Event, Sample, Signal, TraceEvent};
+        self.buf.clear();
+        self.pos = 0;
+        if self.ended {
+            return;
+        }
+        let mut w = crate::jsonl::JsonlWriter::new(std::mem::take(&mut self.buf));
+        // The meta line sets the writer's axes; only the first chunk keeps it.
+        w.write_meta(&Self::meta());
+        let skip_meta = std::mem::replace(&mut self.started, true);
+        let mut n = 0;
+        while n < 700 && self.row < self.rows {
+            let r = self.row;
+            let t_us = r * 1000;
+            if r.is_multiple_of(50) {
+                let event = Event::Signal { signal: Signal::ALL[0], value: (r / 50) % 2 == 1 };
+                w.write_event(&TraceEvent { t_us, event });
+            }
+            let mut axes = [0; nc_engine::trace::AXES];
+            axes[0] = 50_000_000 - (r % 1000) as i64 * 1500;
+            axes[2] = -((r % 500) as i64) * 1_500;
+            let s = Sample {
+                axes,
+                spindle_mrpm: 1_000_000 - (r % 7) as i64,
+                spindle_mdeg: (r * 6000 % 360_000) as i64,
+            };
+            w.write_event(&TraceEvent { t_us, event: Event::Sample(s) });
+            self.row += 1;
+            n += 1;
+        }
+        if self.row >= self.rows {
+            let end = EndSummary {
+                reason: EndReason::ProgramEnd,
+                state: Sample::default(),
+                command: [0; nc_engine::trace::AXES],
+                signals: Default::default(),
+                modal: vec!["G00".to_string()],
+                alarms: 0,
+                blocks: 1,
+            };
+            w.write_event(&TraceEvent { t_us: self.rows * 1000, event: Event::End(end) });
+            self.ended = true;
+        }
+        self.buf = w.finish().unwrap_or_default();
+        if skip_meta {
+            self.pos = self.buf.iter().position(|&c| c == b'\n').map_or(0, |i| i + 1);
+        }
+    }
+}
+
+impl Read for GenJsonl {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        let avail = self.fill_buf()?;
+        let n = avail.len().min(out.len());
+        out[..n].copy_from_slice(&avail[..n]);
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+impl BufRead for GenJsonl {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        if self.pos >= self.buf.len() {
+            self.refill();
+        }
+        Ok(&self.buf[self.pos..])
+    }
+
+    fn consume(&mut self, n: usize) {
+        self.pos = (self.pos + n).min(self.buf.len());
+    }
+}

@@ -16,6 +16,7 @@ use nc_engine::trace::{
 };
 use serde_json::{Map, Value};
 
+use super::jsonl_fast::{self, SampleKeys};
 use super::num::decimal_to_fixed;
 use super::{char_col, read_line, Ctx, ErrorKind, Format, ImportError, RecordedMeta, Source};
 
@@ -182,6 +183,9 @@ struct JsonlSource {
     axes: Vec<AxisSpec>,
     last_t: u64,
     ended: bool,
+    /// The fast path's axis keys; `None` reads every line through serde_json (the differential
+    /// test's reference).
+    fast: Option<SampleKeys>,
 }
 
 /// Reads the `meta` line.
@@ -277,7 +281,8 @@ pub(crate) fn open(
         sample_us: Some(sample_us),
         first_t_us: None,
     };
-    Ok((meta, Box::new(JsonlSource { r, buf, line_no, axes, last_t: 0, ended: false })))
+    let fast = (!ctx.general_only).then(|| SampleKeys::new(&axes));
+    Ok((meta, Box::new(JsonlSource { r, buf, line_no, axes, last_t: 0, ended: false, fast })))
 }
 
 /// An alarm from its code and message: the title and the location are taken off the message.
@@ -469,6 +474,13 @@ impl Source for JsonlSource {
                 Err(e) => {
                     ctx.fault(e)?;
                     continue;
+                }
+            }
+            if let Some((t_us, s)) = self.fast.as_ref().and_then(|k| jsonl_fast::sample(&self.buf, k)) {
+                if !self.ended && t_us >= self.last_t {
+                    self.last_t = t_us;
+                    out.push_back(TraceEvent { t_us, event: Event::Sample(s) });
+                    return Ok(true);
                 }
             }
             if self.buf.iter().all(u8::is_ascii_whitespace) {

@@ -18,6 +18,7 @@ pub mod error;
 pub mod fuzz;
 pub mod gen;
 pub mod jsonl;
+mod jsonl_fast;
 pub mod map;
 pub mod num;
 pub mod shdr;
@@ -123,6 +124,9 @@ pub(crate) struct Ctx {
     pub file: String,
     pub lenient: bool,
     pub warnings: Warnings,
+    /// Read every JSON Lines line through serde_json (no fast path): the differential test's
+    /// reference.
+    pub general_only: bool,
 }
 
 impl Ctx {
@@ -232,10 +236,21 @@ pub fn open(path: &Path, opts: &Options<'_>) -> Result<Importer, ImportError> {
 /// As [`open`].
 pub fn from_reader(
     name: &str,
-    mut reader: Box<dyn BufRead>,
+    reader: Box<dyn BufRead>,
     opts: &Options<'_>,
 ) -> Result<Importer, ImportError> {
-    let mut ctx = Ctx { file: name.to_string(), lenient: opts.lenient, warnings: Warnings::default() };
+    from_reader_with(name, reader, opts, false)
+}
+
+/// [`from_reader`], with `general_only` to read JSON Lines without its fast path.
+pub(crate) fn from_reader_with(
+    name: &str,
+    mut reader: Box<dyn BufRead>,
+    opts: &Options<'_>,
+    general_only: bool,
+) -> Result<Importer, ImportError> {
+    let mut ctx =
+        Ctx { file: name.to_string(), lenient: opts.lenient, warnings: Warnings::default(), general_only };
     let format = match opts.format {
         Some(f) => f,
         None => {
