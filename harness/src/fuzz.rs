@@ -12,7 +12,14 @@
 //! - [`scenario_yaml`]: the bytes as a scenario file: loading never panics, its errors render,
 //!   and a scenario that loads runs and renders (report, timing diagram, event listing, VCD);
 //! - [`engine_case`]: the bytes decoded as a structured campaign [`Case`] (`arbitrary`): the run
-//!   keeps every invariant of `nc_engine::invariants` (`docs/invariants.md`).
+//!   keeps every invariant of `nc_engine::invariants` (`docs/invariants.md`);
+//! - [`cli_files`]: the bytes as a file handed to `nc-conform run` / `check` (program, scenario,
+//!   parameters, recorded trace, column map, tolerances), at realistic sizes or as a special file,
+//!   through the command line itself;
+//! - [`nesting`]: deep nesting built from a structured input (LinuxCNC expressions, o-words,
+//!   recursion, VCD scopes), as deep as [`nesting::MAX_DEPTH`];
+//! - [`adapter_lines`]: the adapter runner of `nc-conform conform` against a fuzzed fake adapter
+//!   process (its answer lines and how it misbehaves after them).
 //!
 //! # Bounded cost
 //!
@@ -26,6 +33,14 @@
 //! file (a fuzzed `/dev/zero` would otherwise read forever).
 
 use std::path::{Component, Path};
+
+pub mod adapter_lines;
+pub mod cli_files;
+pub mod nesting;
+
+pub use adapter_lines::adapter_lines;
+pub use cli_files::cli_files;
+pub use nesting::nesting;
 
 use arbitrary::{Arbitrary, Unstructured};
 use nc_engine::invariants::time_ordered_ends;
