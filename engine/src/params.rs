@@ -139,6 +139,9 @@ impl Params {
     }
 }
 
+/// The values `nc.period_us` takes (DEC-17).
+pub const PERIODS_US: [f64; 4] = [1000.0, 2000.0, 4000.0, 8000.0];
+
 /// Checks a value against a definition.
 pub fn check_value(def: &ParamDef, value: f64) -> Result<(), ParamError> {
     let range = || match def.kind {
@@ -149,6 +152,13 @@ pub fn check_value(def: &ParamDef, value: f64) -> Result<(), ParamError> {
         return Err(ParamError {
             message: format!("parameter {} ({}) = {value} is out of range", def.id, def.name),
             expected: range(),
+        });
+    }
+    // The interpolation period is one of four (DEC-17): 1500 is refused, not taken as 2000.
+    if def.id == "nc.period_us" && value.is_finite() && !PERIODS_US.contains(&value) {
+        return Err(ParamError {
+            message: format!("parameter {} ({}) = {value} is not one of the four periods", def.id, def.name),
+            expected: "1000, 2000, 4000 or 8000 us".into(),
         });
     }
     if matches!(def.kind, ParamKind::Bit | ParamKind::Int) && value.fract() != 0.0 {

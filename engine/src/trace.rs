@@ -220,6 +220,9 @@ pub enum EndReason {
     Stopped,
     /// The run's time limit was reached.
     TimeLimit,
+    /// The trace sink asked the run to stop ([`TraceSink::wants_stop`]): the harness's output
+    /// budget was spent.
+    OutputLimit,
 }
 
 impl EndReason {
@@ -231,6 +234,7 @@ impl EndReason {
             EndReason::Reset => "reset",
             EndReason::Stopped => "stopped",
             EndReason::TimeLimit => "time_limit",
+            EndReason::OutputLimit => "output_limit",
         }
     }
 }
@@ -311,6 +315,11 @@ pub trait TraceSink {
     fn start(&mut self, _meta: &TraceMeta) {}
     /// Called for every event, in time order.
     fn event(&mut self, ev: &TraceEvent);
+    /// True when the sink wants no more events: the run then stops at once with end reason
+    /// `output_limit` (the `End` event is still written). Default: never.
+    fn wants_stop(&self) -> bool {
+        false
+    }
 }
 
 /// A whole trace in memory.

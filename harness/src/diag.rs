@@ -60,6 +60,26 @@ fn floor_char_boundary(s: &str, i: usize) -> usize {
     i
 }
 
+/// Characters of a source line shown before the marked span (the rest is cut, `…`).
+const SNIPPET_BEFORE: usize = 80;
+/// Characters of a source line shown from the marked span on.
+const SNIPPET_WIDTH: usize = 160;
+/// The largest source shown by miette (a larger one is shown in the plain form).
+const FANCY_MAX_SOURCE: usize = 1 << 20;
+
+/// A character of a source line as shown in a snippet: itself, or for a control character its
+/// picture (`␛` for ESC, `␀` for NUL, U+2400..), for other invisible or direction-changing
+/// characters `�` — always one character for one, so that carets stay aligned.
+fn visible(c: char) -> char {
+    match c {
+        '\t' | '\n' => c,
+        '\u{0}'..='\u{1f}' => char::from_u32(0x2400 + c as u32).unwrap_or('\u{fffd}'),
+        '\u{7f}' => '\u{2421}',
+        c if c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}') => '\u{fffd}',
+        c => c,
+    }
+}
+
 /// An error in something the user gave the harness.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InputError {
@@ -103,11 +123,14 @@ impl InputError {
         }
     }
 
-    /// `file:line:col: message; expected …`, the first line of the plain form.
+    /// `file:line:col: message; expected …`, the first line of the plain form (what it echoes
+    /// from the input made printable, see [`printable`]).
     pub fn headline(&self) -> String {
+        let location = printable(&self.location(), 300);
+        let message = printable(&self.message, 600);
         match &self.expected {
-            Some(e) => format!("{}: {}; expected {}", self.location(), self.message, e),
-            None => format!("{}: {}", self.location(), self.message),
+            Some(e) => format!("{location}: {message}; expected {}", printable(e, 600)),
+            None => format!("{location}: {message}"),
         }
     }
 
@@ -124,20 +147,37 @@ impl InputError {
             let line_text = line_text.strip_suffix('\r').unwrap_or(line_text);
             let num = span.line.to_string();
             let pad = " ".repeat(num.len());
-            let _ = writeln!(out, "{pad} |");
-            let _ = writeln!(out, "{num} | {line_text}");
             let in_line = floor_char_boundary(line_text, offset - start);
             let end = floor_char_boundary(line_text, in_line.saturating_add(span.len));
-            let prefix: String =
-                line_text[..in_line].chars().map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
-            let width = line_text[in_line..end].chars().count().max(1);
-            let _ = writeln!(out, "{pad} | {prefix}{}", "^".repeat(width));
+            // A window of the line around the span (a line may be megabytes long), each
+            // character shown as one printable character so that the caret stays under it.
+            let before: Vec<char> = line_text[..in_line].chars().collect();
+            let skip = before.len().saturating_sub(SNIPPET_BEFORE);
+            let marked = line_text[in_line..end].chars().count().clamp(1, SNIPPET_WIDTH);
+            let shown: String =
+                line_text[..].chars().skip(skip).take(SNIPPET_WIDTH + SNIPPET_BEFORE).map(visible).collect();
+            let cut = line_text.chars().count() > skip + SNIPPET_WIDTH + SNIPPET_BEFORE;
+            let (lead, tail) = (if skip > 0 { "…" } else { "" }, if cut { "…" } else { "" });
+            let _ = writeln!(out, "{pad} |");
+            let _ = writeln!(out, "{num} | {lead}{shown}{tail}");
+            let prefix: String = before[skip..].iter().map(|&c| if c == '\t' { '\t' } else { ' ' }).collect();
+            let lead_pad = if skip > 0 { " " } else { "" };
+            let _ = writeln!(out, "{pad} | {lead_pad}{prefix}{}", "^".repeat(marked));
         }
         out
     }
 
-    /// The graphical form (miette), with or without colour.
+    /// The graphical form (miette), with or without colour; the plain form for a source that
+    /// is too large or whose line is too long to show whole.
     pub fn render_fancy(&self, color: bool) -> String {
+        if let Some((span, text)) = &self.at {
+            let at = floor_char_boundary(text, span.offset);
+            let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+            let line_len = text[line_start..].find('\n').unwrap_or(text.len() - line_start);
+            if text.len() > FANCY_MAX_SOURCE || line_len > SNIPPET_WIDTH {
+                return self.render_plain();
+            }
+        }
         let theme =
             if color { miette::GraphicalTheme::unicode() } else { miette::GraphicalTheme::unicode_nocolor() };
         let handler = miette::GraphicalReportHandler::new_themed(theme).without_primary_span_start();
@@ -186,23 +226,30 @@ struct Fancy {
 
 impl From<&InputError> for Fancy {
     fn from(e: &InputError) -> Self {
-        let headline = format!("{}: {}", e.location(), e.message);
-        let label = e.expected.as_deref().map_or_else(|| "here".to_string(), |x| format!("expected {x}"));
+        let headline = format!("{}: {}", printable(&e.location(), 300), printable(&e.message, 600));
+        let label = e
+            .expected
+            .as_deref()
+            .map_or_else(|| "here".to_string(), |x| format!("expected {}", printable(x, 600)));
         match &e.at {
             Some((span, text)) => {
                 // Kept inside the text and on char boundaries, whatever the span says.
                 let start = floor_char_boundary(text, span.offset);
                 let end = floor_char_boundary(text, span.offset.saturating_add(span.len)).max(start);
+                // Shown with control characters as visible ones; the span follows the change
+                // of byte lengths.
+                let shown = |s: &str| s.replace("\r\n", "\n").chars().map(visible).collect::<String>();
+                let (new_start, marked) = (shown(&text[..start]).len(), shown(&text[start..end]).len());
                 Fancy {
                     headline,
-                    src: Some(miette::NamedSource::new(&e.file, text.clone())),
-                    span: Some(miette::SourceSpan::new(start.into(), end - start)),
+                    src: Some(miette::NamedSource::new(printable(&e.file, 300), shown(text))),
+                    span: Some(miette::SourceSpan::new(new_start.into(), marked)),
                     label,
                 }
             }
             None => Fancy {
                 headline: match &e.expected {
-                    Some(x) => format!("{headline}; expected {x}"),
+                    Some(x) => format!("{headline}; expected {}", printable(x, 600)),
                     None => headline,
                 },
                 src: None,
@@ -211,6 +258,96 @@ impl From<&InputError> for Fancy {
             },
         }
     }
+}
+
+/// Text from a file, a program or an adapter made safe to echo on a terminal: control
+/// characters (escape sequences, NUL, a lone CR, bidirectional overrides) are written as
+/// `\u{1b}`, a tab as a space; at most `max` characters are kept, then `…`.
+pub fn printable(s: &str, max: usize) -> String {
+    let mut out = String::with_capacity(s.len().min(max * 2));
+    for (n, c) in s.chars().enumerate() {
+        if n >= max {
+            out.push('…');
+            break;
+        }
+        match c {
+            '\t' => out.push(' '),
+            c if c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}') => {
+                let _ = write!(out, "\\u{{{:x}}}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// A message of the YAML library in the project's words: the library speaks of its own types and
+/// options ("invalid u64", "set DuplicateKeyPolicy in Options", "budget breached: Nodes {..}"),
+/// which mean nothing to the person who wrote the file.
+pub fn yaml_wording(message: &str) -> String {
+    if let Some(rest) = message.strip_prefix("duplicate mapping key") {
+        let key = rest.strip_prefix(": ").and_then(|k| k.split(", set DuplicateKeyPolicy").next());
+        return match key {
+            Some(k) => {
+                format!("key `{}` given twice (each key may appear once in a mapping)", printable(k, 60))
+            }
+            None => "a key given twice (each key may appear once in a mapping)".into(),
+        };
+    }
+    if let Some(rest) = message.strip_prefix("budget breached: ") {
+        let what = rest.split([' ', '{']).next().unwrap_or("");
+        let plain = match what {
+            "Nodes" | "Events" => "too many values",
+            "ScalarBytes" | "InputBytes" | "CommentBytes" => "a value or the file is too long",
+            "Depth" | "InclusionDepth" | "PropertyExpansionDepth" => "nested too deeply",
+            "Aliases"
+            | "Anchors"
+            | "AliasAnchorRatio"
+            | "RecordedAnchorEvents"
+            | "RecordedAnchorBytes"
+            | "MergeKeys" => "too many anchors, aliases or merge keys",
+            "Documents" => "more than one document",
+            _ => "too large",
+        };
+        return format!("the YAML is beyond what the tool reads: {plain}");
+    }
+    let mut out = message.to_string();
+    for (lib, ours) in [
+        ("invalid u8", "expected a whole number of 0 or more, within range"),
+        ("invalid u16", "expected a whole number of 0 or more, within range"),
+        ("invalid u32", "expected a whole number of 0 or more, within range"),
+        ("invalid u64", "expected a whole number of 0 or more, within range"),
+        ("invalid usize", "expected a whole number of 0 or more, within range"),
+        ("invalid i8", "expected a whole number, within range"),
+        ("invalid i16", "expected a whole number, within range"),
+        ("invalid i32", "expected a whole number, within range"),
+        ("invalid i64", "expected a whole number, within range"),
+        ("invalid f32", "expected a number"),
+        ("invalid f64", "expected a number"),
+        ("invalid floating point", "expected a number"),
+    ] {
+        if out == lib || out.starts_with(&format!("{lib}:")) || out.starts_with(&format!("{lib} ")) {
+            out = out.replacen(lib, ours, 1);
+        }
+    }
+    out
+}
+
+/// A report of several lines made safe for a terminal: as [`printable`] line by line (line
+/// breaks and tabs kept, nothing cut), for reports that quote what a recorded trace or an
+/// adapter said.
+pub fn printable_lines(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '\n' | '\t' => out.push(c),
+            c if c.is_control() || matches!(c, '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}') => {
+                let _ = write!(out, "\\u{{{:x}}}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// A parse error of `text` (the file `name`) as an input error at its span.
@@ -278,7 +415,8 @@ mod tests {
         let src = "a: 1\rbé: 2\nc: 3\n";
         let span = Span { line: 2, col: 1, offset: 5, len: 3 };
         let text = InputError::at("s.yaml", src, span, "unknown field", None).render_plain();
-        assert!(text.contains("2 | a: 1\rbé: 2\n"), "{text}");
+        // The lone CR is shown as its picture: written raw it would return the cursor.
+        assert!(text.contains("2 | a: 1␍bé: 2\n"), "{text}");
         for (offset, len) in [(5, 2), (7, 1), (7, 99), (99, 1), (0, usize::MAX)] {
             let e = InputError::at("s.yaml", src, Span { line: 9, col: 1, offset, len }, "m", None);
             assert!(e.render_plain().starts_with("error: s.yaml:9:1: m"));
@@ -291,6 +429,30 @@ mod tests {
         let e = InputError::new("missing.nc", "cannot read: No such file");
         assert_eq!(e.render_plain(), "error: missing.nc: cannot read: No such file\n");
         assert!(e.render_fancy(false).contains("missing.nc: cannot read"));
+    }
+
+    #[test]
+    fn printable_escapes_control_characters_and_truncates() {
+        assert_eq!(printable("G0\u{1b}[2J\tX1\0", 100), "G0\\u{1b}[2J X1\\u{0}");
+        assert_eq!(printable("abcdef", 3), "abc…");
+        assert_eq!(printable("a\u{202e}b", 10), "a\\u{202e}b");
+    }
+
+    #[test]
+    fn yaml_errors_are_said_in_the_projects_words() {
+        assert_eq!(yaml_wording("invalid u64"), "expected a whole number of 0 or more, within range");
+        assert_eq!(
+            yaml_wording("duplicate mapping key: title, set DuplicateKeyPolicy in Options if acceptable"),
+            "key `title` given twice (each key may appear once in a mapping)"
+        );
+        assert_eq!(
+            yaml_wording("budget breached: ScalarBytes { total_scalar_bytes: 1 }"),
+            "the YAML is beyond what the tool reads: a value or the file is too long"
+        );
+        for m in ["budget breached: Nodes { nodes: 250001 }", "invalid floating point", "invalid i32"] {
+            let w = yaml_wording(m);
+            assert!(!w.contains("budget") && !w.contains("invalid") && !w.contains("Options"), "{w}");
+        }
     }
 
     #[test]

@@ -34,12 +34,38 @@ pub struct JsonlWriter<W: Write> {
     axes: Vec<(usize, Box<[u8]>)>,
     error: Option<io::Error>,
     end: Option<EndReason>,
+    /// Bytes handed to `out` so far.
+    written: u64,
+    /// The output budget: past it the writer asks the run to stop (`output_limit`).
+    budget: Option<u64>,
 }
 
 impl<W: Write> JsonlWriter<W> {
     /// A writer into `out`.
     pub fn new(out: W) -> Self {
-        JsonlWriter { out, buf: Vec::with_capacity(CHUNK + 4096), axes: Vec::new(), error: None, end: None }
+        JsonlWriter {
+            out,
+            buf: Vec::with_capacity(CHUNK + 4096),
+            axes: Vec::new(),
+            error: None,
+            end: None,
+            written: 0,
+            budget: None,
+        }
+    }
+
+    /// The same writer with an output budget in bytes: once the trace is that long it asks the
+    /// run to stop ([`TraceSink::wants_stop`]), which then ends with reason `output_limit` (its
+    /// `end` line is still written).
+    #[must_use]
+    pub fn with_budget(mut self, bytes: u64) -> Self {
+        self.budget = Some(bytes);
+        self
+    }
+
+    /// Bytes of trace written so far (buffered ones included).
+    pub fn bytes(&self) -> u64 {
+        self.written + self.buf.len() as u64
     }
 
     /// The reason of the `end` event, once it has been written.
@@ -163,6 +189,7 @@ impl<W: Write> JsonlWriter<W> {
                 self.error = Some(e);
             }
         }
+        self.written += self.buf.len() as u64;
         self.buf.clear();
     }
 }
@@ -174,6 +201,11 @@ impl<W: Write> TraceSink for JsonlWriter<W> {
 
     fn event(&mut self, ev: &TraceEvent) {
         self.write_event(ev);
+    }
+
+    /// Past the budget, or once the output failed (a reader that went away), the run stops.
+    fn wants_stop(&self) -> bool {
+        self.error.is_some() || self.budget.is_some_and(|b| self.bytes() >= b)
     }
 }
 

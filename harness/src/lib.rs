@@ -5,6 +5,7 @@
 //!
 //! - [`cli`]: the `nc-conform` command line;
 //! - [`determinism`]: `run --check-determinism`;
+//! - [`json_keys`]: JSON that refuses a key given twice;
 //! - [`jsonl`]: the JSON Lines trace writer (`docs/trace-format.md`);
 //! - [`params_yaml`]: parameter files (`docs/parameters-format.md`);
 //! - [`diag`]: input errors with their location, rendered with miette or as plain text;
@@ -26,6 +27,7 @@ pub mod diag;
 pub mod fuzz;
 pub mod import;
 pub mod input;
+pub mod json_keys;
 pub mod jsonl;
 pub mod params_yaml;
 pub mod render;

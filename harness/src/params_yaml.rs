@@ -198,7 +198,7 @@ pub(crate) fn yaml_error(text: &str, e: &serde_saphyr::Error) -> ParamsFileError
     if let Some(m) = message.strip_suffix(&suffix) {
         message = m.to_string();
     }
-    let message = format!("invalid parameter file: {message}");
+    let message = format!("invalid parameter file: {}", crate::diag::yaml_wording(&message));
     ParamsFileError { span, message, expected: None }
 }
 

@@ -242,6 +242,10 @@ impl Exec<'_> {
                 break;
             }
             self.advance_to(t);
+            if self.sink.wants_stop() {
+                self.finish(EndReason::OutputLimit);
+                break;
+            }
             self.handle_events_at(t);
         }
     }
@@ -283,6 +287,11 @@ impl Exec<'_> {
                 let s = self.sample_at(self.next_sample);
                 self.sink.event(&TraceEvent { t_us: self.next_sample, event: Event::Sample(s) });
                 self.next_sample += self.opts.sample_us;
+                if self.sink.wants_stop() {
+                    // The run ends here, at the last sample written (`main_loop`).
+                    self.now = (self.next_sample - self.opts.sample_us).max(self.now);
+                    return;
+                }
             }
         }
         self.now = t;

@@ -11,14 +11,14 @@ use std::path::PathBuf;
 
 use clap::builder::PossibleValuesParser;
 use clap::Args;
-use nc_engine::trace::TraceEvent;
+use nc_engine::trace::{EndReason, Event, TraceEvent, TraceMeta, TraceSink, VecSink};
 use nc_engine::{Machine, RunOptions};
 
 use super::{display_name, parse_error, run_scenario, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::check::{self, report, Anchor, CheckSpec, Tolerances};
 use crate::diag::InputError;
 use crate::import::{self, ColumnMap, Format, ImportError};
-use crate::input::{load_tolerances, read_utf8 as read};
+use crate::input::{self, load_tolerances};
 use crate::{params_yaml, scenario::load};
 
 /// Arguments of `nc-conform check`.
@@ -58,7 +58,8 @@ pub struct CheckArgs {
     pub anchor: Option<String>,
 
     /// An explicit alignment instead of an anchor: reference time = recorded time + N µs.
-    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    #[arg(long, value_name = "N", allow_hyphen_values = true,
+          value_parser = clap::value_parser!(i64).range(-MAX_OFFSET_US..=MAX_OFFSET_US))]
     pub offset_us: Option<i64>,
 
     /// Tolerances (YAML, docs/checking.md); default: `SCENARIO.check.yaml` next to the scenario
@@ -96,6 +97,33 @@ fn import_error(e: &ImportError) -> InputError {
     ie
 }
 
+/// The largest alignment offset, µs (about 31 years): beyond it times overflow.
+const MAX_OFFSET_US: i64 = 1_000_000_000_000_000;
+
+/// The most recorded events other than samples a comparison keeps.
+const MAX_RECORDED_EVENTS: usize = 1_000_000;
+
+/// The most events of a program's reference run held in memory.
+const MAX_REFERENCE_EVENTS: usize = 1_000_000;
+
+/// A sink keeping the whole trace, that stops the run at `cap` events.
+struct Capped {
+    inner: VecSink,
+    cap: usize,
+}
+
+impl TraceSink for Capped {
+    fn start(&mut self, meta: &TraceMeta) {
+        self.inner.start(meta);
+    }
+    fn event(&mut self, ev: &TraceEvent) {
+        self.inner.event(ev);
+    }
+    fn wants_stop(&self) -> bool {
+        self.inner.events.len() >= self.cap
+    }
+}
+
 fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     let input_name = display_name(&args.input);
     // The reference run.
@@ -120,13 +148,28 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         let mut machine = Machine::new(dialect)
             .ok_or_else(|| InputError::new("--dialect", format!("unknown dialect `{dialect}`")))?;
         if let Some(p) = &args.params {
-            let yaml = read(p)?;
+            let yaml = input::read_utf8(p, input::YAML)?;
             params_yaml::apply(&yaml, &mut machine)
                 .map_err(|e| InputError::at(display_name(p), &yaml, e.span, e.message, e.expected))?;
         }
-        let text = read(&args.input)?;
+        let text = input::read_text(&args.input, input::PROGRAM)?;
         let program = machine.parse(&text).map_err(|e| parse_error(&input_name, &text, &e))?;
-        let trace = machine.run_to_trace(&program, &RunOptions::default());
+        // Held in memory: at most MAX_REFERENCE_EVENTS events (a slow feed would otherwise fill
+        // the memory with seven days of samples).
+        let mut sink = Capped { inner: VecSink::default(), cap: MAX_REFERENCE_EVENTS };
+        machine.run(&program, &RunOptions::default(), &mut sink);
+        let trace = sink.inner.into_trace();
+        if trace.end().is_some_and(|e| e.reason == EndReason::OutputLimit) {
+            let secs = trace.events.last().map_or(0, |e| e.t_us) as f64 / 1e6;
+            let mut e = InputError::new(
+                &input_name,
+                format!(
+                    "the reference run of the program did not end within {MAX_REFERENCE_EVENTS} trace events ({secs} s of machine time)"
+                ),
+            );
+            e.expected = Some("a program that ends (check compares whole runs)".into());
+            return Err(e);
+        }
         (format!("{input_name} ({dialect}, default inputs)"), trace, None, Vec::new(), None)
     };
     let tolerances = match args.tolerances.as_ref().or(tol_default.as_ref()) {
@@ -142,6 +185,13 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         })?),
         (None, None) => None,
     };
+    if let Some(Anchor::Offset(o)) = anchor {
+        if o.unsigned_abs() > MAX_OFFSET_US.unsigned_abs() {
+            let mut e = InputError::new("--anchor", format!("offset {o} µs is out of range"));
+            e.expected = Some(format!("an offset of at most ±{MAX_OFFSET_US} µs"));
+            return Err(e);
+        }
+    }
     // The recorded stream.
     let map = match &args.map {
         Some(p) => Some(ColumnMap::load(p)?),
@@ -153,10 +203,49 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         lenient: args.lenient,
     };
     let mut importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
+    // A JSON Lines trace names its dialect: one other than the reference's is a mistake in the
+    // command line, not 25 divergences.
+    if let Some(recorded) = importer.meta().trace.as_ref().map(|m| m.dialect) {
+        if recorded != reference.meta.dialect {
+            let mut e = InputError::new(
+                display_name(&args.trace),
+                format!(
+                    "the trace was recorded with dialect {} (its meta line), the reference runs {}",
+                    crate::diag::printable(recorded, 40),
+                    reference.meta.dialect
+                ),
+            );
+            e.expected =
+                Some(format!("a trace of dialect {} (or --dialect {recorded})", reference.meta.dialect));
+            return Err(e);
+        }
+    }
     let carried = check::Carried::of(importer.meta());
     let mut failure: Option<ImportError> = None;
+    // The comparison keeps the recorded events other than samples: at most
+    // MAX_RECORDED_EVENTS of them (docs/input-limits.md).
+    let mut discrete = 0usize;
+    let trace_name = display_name(&args.trace);
     let stream = std::iter::from_fn(|| match importer.next()? {
-        Ok(ev) => Some(ev),
+        Ok(ev) => {
+            if !matches!(ev.event, Event::Sample(_)) {
+                discrete += 1;
+                if discrete > MAX_RECORDED_EVENTS {
+                    failure = Some(ImportError::new(
+                        import::ErrorKind::Io,
+                        &trace_name,
+                        0,
+                        0,
+                        format!(
+                            "more than {MAX_RECORDED_EVENTS} recorded events other than samples (at {} s), more than check holds",
+                            ev.t_us as f64 / 1e6
+                        ),
+                    ));
+                    return None;
+                }
+            }
+            Some(ev)
+        }
         Err(e) => {
             failure = Some(e);
             None
@@ -174,7 +263,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     if warnings > 0 {
         text.push_str(&format!("warning: {warnings} faulty row(s) of {trace_name} left out (--lenient)\n"));
     }
-    print!("{text}");
+    print!("{}", crate::diag::printable_lines(&text));
     let write = |p: &PathBuf, body: String| {
         std::fs::write(p, body).map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))
     };

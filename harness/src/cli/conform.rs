@@ -38,6 +38,11 @@ pub struct ConformArgs {
     #[arg(long, value_name = "N", default_value_t = 10_000)]
     pub timeout_ms: u64,
 
+    /// Most time one scenario may take against the adapter, ms (from its `load`): past it the
+    /// scenario fails and the adapter is restarted for the next one.
+    #[arg(long, value_name = "N", default_value_t = 600_000)]
+    pub scenario_timeout_ms: u64,
+
     /// Write the verdicts as JUnit XML (one test case per scenario).
     #[arg(long, value_name = "FILE.xml")]
     pub junit: Option<PathBuf>,
@@ -77,7 +82,8 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
         e.expected = Some(".yaml files under the directory (and a --filter that matches some)".into());
         return Err(e);
     }
-    let mut ctl = ProcessController::new(argv, Duration::from_millis(args.timeout_ms.max(1)));
+    let mut ctl = ProcessController::new(argv, Duration::from_millis(args.timeout_ms.max(1)))
+        .with_scenario_limit(Duration::from_millis(args.scenario_timeout_ms.max(1)));
     let id = ctl
         .identity()
         .map_err(|e| InputError::new("--adapter", format!("the adapter cannot be greeted: {e}")))?;
@@ -93,7 +99,7 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
         println!("{tag} {name}");
         report.scenarios.push(v);
     }
-    print!("\n{}", report.summary());
+    print!("\n{}", crate::diag::printable_lines(&report.summary()));
     let write = |p: &PathBuf, body: String| {
         std::fs::write(p, body).map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))
     };

@@ -4,16 +4,18 @@
 
 use std::fs::File;
 use std::io::{self, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::builder::PossibleValuesParser;
 use clap::Args;
-use nc_engine::trace::EndReason;
+use nc_engine::alarm::Alarm;
+use nc_engine::trace::{EndReason, Event, TraceEvent, TraceMeta, TraceSink};
 use nc_engine::{Machine, RunOptions};
 
 use super::{display_name, parse_error, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::determinism::{self, Digest};
-use crate::diag::InputError;
+use crate::diag::{self, InputError};
+use crate::input;
 use crate::jsonl::JsonlWriter;
 use crate::params_yaml;
 
@@ -52,6 +54,33 @@ pub struct RunArgs {
     /// otherwise the usual exit status (the first run's output is written as usual).
     #[arg(long)]
     pub check_determinism: bool,
+
+    /// Stop the run after this many seconds of simulated machine time (end reason `time_limit`,
+    /// exit 1). For a program; a scenario names its own (`options.time_limit_ms`).
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_TIME_LIMIT_S, value_parser = seconds)]
+    pub time_limit: f64,
+
+    /// Stop the run once its trace is this many MiB long (end reason `output_limit`, exit 1,
+    /// a line on stderr); 0: no limit. A slow feed or a long dwell would otherwise write samples
+    /// until the time limit (docs/input-limits.md).
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_OUTPUT_MIB)]
+    pub max_output_mib: u64,
+}
+
+/// `--time-limit` by default: seven days of machine time, the engine's own default.
+pub const DEFAULT_TIME_LIMIT_S: f64 = 604_800.0;
+
+/// `--max-output-mib` by default: 1 GiB of trace, about 2.5 hours of machine time at the default
+/// 1 ms samples.
+pub const DEFAULT_MAX_OUTPUT_MIB: u64 = 1024;
+
+/// A `--time-limit` value: seconds, above 0, at most 100 years, whole microseconds.
+fn seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    if !(v > 0.0 && v <= 3.2e9) {
+        return Err(format!("`{s}`: expected seconds above 0 and at most 3.2e9"));
+    }
+    Ok(v)
 }
 
 /// Carries out `nc-conform run`; returns the exit status (errors are reported on stderr).
@@ -86,10 +115,10 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
         e
     })?;
     let program_name = display_name(&args.program);
-    let text = read_text(&args.program)?;
+    let text = input::read_text(&args.program, input::PROGRAM)?;
     if let Some(path) = &args.params {
         let name = display_name(path);
-        let yaml = read_text(path)?;
+        let yaml = input::read_text(path, input::YAML)?;
         params_yaml::apply(&yaml, &mut machine)
             .map_err(|e| InputError::at(name, &yaml, e.span, e.message, e.expected))?;
     }
@@ -103,10 +132,19 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
         }
         None => (Box::new(io::stdout().lock()), "standard output".to_string()),
     };
-    let opts = RunOptions { sample_us: args.sample_us, ..RunOptions::default() };
-    let mut writer = JsonlWriter::new(Digest::new(Some(sink)));
+    let opts = RunOptions {
+        sample_us: args.sample_us,
+        time_limit_us: (args.time_limit * 1e6).round() as u64,
+        ..RunOptions::default()
+    };
+    let budget = args.max_output_mib.checked_mul(1024 * 1024).filter(|b| *b > 0).unwrap_or(u64::MAX);
+    let mut writer = FirstAlarm::new(JsonlWriter::new(Digest::new(Some(sink))).with_budget(budget));
     machine.run(&program, &opts, &mut writer);
+    let (writer, alarm) = (writer.inner, writer.alarm);
     let end = writer.end_reason().cloned();
+    if let Some(why) = why_not_ended(end.as_ref(), alarm.as_ref(), &program_name, &text, args) {
+        eprintln!("{why}");
+    }
     let first = match writer.finish() {
         Ok(d) => d.summary(),
         // A reader that stopped early (`| head`) is not an error of the run.
@@ -114,7 +152,7 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
         Err(e) => return Err(InputError::new(dest, format!("cannot write the trace: {e}"))),
     };
     if args.check_determinism {
-        let mut again = JsonlWriter::new(Digest::<io::Sink>::new(None));
+        let mut again = JsonlWriter::new(Digest::<io::Sink>::new(None)).with_budget(budget);
         machine.run(&program, &opts, &mut again);
         let second = again.finish().map(|d| d.summary()).unwrap_or_default();
         if second != first {
@@ -125,17 +163,79 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
     Ok(exit_of(end))
 }
 
+/// A sink that passes every event on and keeps the first alarm.
+struct FirstAlarm<S> {
+    inner: S,
+    alarm: Option<Alarm>,
+}
+
+impl<S: TraceSink> FirstAlarm<S> {
+    fn new(inner: S) -> Self {
+        FirstAlarm { inner, alarm: None }
+    }
+}
+
+impl<S: TraceSink> TraceSink for FirstAlarm<S> {
+    fn start(&mut self, meta: &TraceMeta) {
+        self.inner.start(meta);
+    }
+    fn event(&mut self, ev: &TraceEvent) {
+        if let (None, Event::Alarm(a)) = (&self.alarm, &ev.event) {
+            self.alarm = Some(a.clone());
+        }
+        self.inner.event(ev);
+    }
+    fn wants_stop(&self) -> bool {
+        self.inner.wants_stop()
+    }
+}
+
+/// The one line on stderr that says why a run did not reach its program end (exit 1), or
+/// `None` when it did. An alarm names its code, message and the program line that raised it.
+fn why_not_ended(
+    end: Option<&EndReason>,
+    alarm: Option<&Alarm>,
+    name: &str,
+    text: &str,
+    args: &RunArgs,
+) -> Option<String> {
+    let name = diag::printable(name, 200);
+    Some(match end? {
+        EndReason::ProgramEnd => return None,
+        EndReason::Alarm => match alarm {
+            Some(a) => {
+                let at = a.line.map(|l| format!(":{l}")).unwrap_or_default();
+                let block = a
+                    .line
+                    .and_then(|l| text.lines().nth((l as usize).saturating_sub(1)))
+                    .map(|b| format!(" in `{}`", diag::printable(b.trim(), 120)))
+                    .unwrap_or_default();
+                let message = match a.detail.as_str() {
+                    "" => a.kind.title().to_string(),
+                    d => format!("{}: {}", a.kind.title(), diag::printable(d, 300)),
+                };
+                format!("{name}{at}: alarm {}: {message}{block}", a.kind.code())
+            }
+            None => format!("{name}: the run stopped on an alarm"),
+        },
+        EndReason::Reset => format!("{name}: the run ended on a reset"),
+        EndReason::Stopped => {
+            format!("{name}: the run stopped, held with nothing to restart it (M00/M01, feed hold or single block)")
+        }
+        EndReason::TimeLimit => format!(
+            "{name}: the run reached its time limit of {} s of machine time before the program end (--time-limit)",
+            args.time_limit
+        ),
+        EndReason::OutputLimit => format!(
+            "{name}: the run was stopped when its trace reached {} MiB (--max-output-mib)",
+            args.max_output_mib
+        ),
+    })
+}
+
 fn exit_of(end: Option<EndReason>) -> u8 {
     match end {
         Some(EndReason::ProgramEnd) => EXIT_OK,
         _ => EXIT_RUN_FAILED,
     }
-}
-
-/// Reads a text file (invalid UTF-8 is replaced, a leading byte-order mark dropped).
-fn read_text(path: &Path) -> Result<String, InputError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| InputError::new(display_name(path), format!("cannot read: {e}")))?;
-    let text = String::from_utf8_lossy(&bytes);
-    Ok(text.strip_prefix('\u{feff}').unwrap_or(&text).to_string())
 }

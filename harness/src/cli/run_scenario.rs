@@ -40,6 +40,12 @@ pub fn run(args: &RunArgs) -> Result<u8, InputError> {
             "a scenario names its own dialect and parameters; leave out --dialect and --params",
         ));
     }
+    if args.time_limit != super::run::DEFAULT_TIME_LIMIT_S {
+        return Err(InputError::new(
+            "--time-limit",
+            "a scenario names its own time limit (options.time_limit_ms); leave out --time-limit",
+        ));
+    }
     let name = display_name(&args.program);
     let mut s = load::load(&args.program, &name)?;
     s.opts.sample_us = if args.sample_us == nc_engine::RunOptions::default().sample_us {
@@ -47,6 +53,20 @@ pub fn run(args: &RunArgs) -> Result<u8, InputError> {
     } else {
         args.sample_us
     };
+    // The trace is held in memory: --sample-us may not make it hold more than a scenario may.
+    if s.opts.sample_us > 0 && s.opts.time_limit_us / s.opts.sample_us > load::MAX_SAMPLES {
+        let mut e = InputError::new(
+            "--sample-us",
+            format!(
+                "{} µs samples over the scenario's time limit of {} ms would be more than {} samples",
+                s.opts.sample_us,
+                s.opts.time_limit_us / 1000,
+                load::MAX_SAMPLES
+            ),
+        );
+        e.expected = Some("a larger --sample-us (or none: the scenario's own)".into());
+        return Err(e);
+    }
     let outcome = run::run(&s);
     let code = if outcome.passed() { EXIT_OK } else { EXIT_RUN_FAILED };
     if args.check_determinism {

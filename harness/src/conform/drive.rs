@@ -24,17 +24,22 @@ pub const MAX_STEPS: usize = 100_000;
 ///
 /// The file or its program file cannot be read or parsed.
 pub fn program_text(path: &Path, name: &str) -> Result<String, InputError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| InputError::new(name, format!("cannot read: {e}")))?;
+    let bytes = crate::input::read_capped(path, crate::input::YAML).map_err(|m| InputError::new(name, m))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| InputError::new(name, "cannot read: stream did not contain valid UTF-8"))?;
     let options = serde_saphyr::options! { strict_booleans: true, with_snippet: false };
-    let file: ScenarioFile = serde_saphyr::from_str_with_options(&text, options)
-        .map_err(|e| InputError::new(name, format!("invalid scenario: {e}")))?;
+    let file: ScenarioFile = serde_saphyr::from_str_with_options(&text, options).map_err(|e| {
+        let pe = crate::params_yaml::yaml_error(&text, &e);
+        let message = pe.message.replacen("invalid parameter file", "invalid scenario", 1);
+        InputError::at(name, &text, pe.span, message, pe.expected)
+    })?;
     match (file.program, file.program_file) {
         (Some(p), _) => Ok(p.value),
         (None, Some(f)) => {
             let p = path.parent().unwrap_or(Path::new(".")).join(&f.value);
-            std::fs::read_to_string(&p)
-                .map_err(|e| InputError::new(name, format!("cannot read program file {}: {e}", p.display())))
+            crate::input::read_capped(&p, crate::input::PROGRAM)
+                .map(crate::input::lossy_text)
+                .map_err(|e| InputError::new(name, format!("program file {}: {e}", p.display())))
         }
         (None, None) => Err(InputError::new(name, "the scenario has no program")),
     }

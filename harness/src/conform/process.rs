@@ -2,17 +2,19 @@
 //! `docs/adapter-protocol.md`: one JSON object per line on its stdin, one answer per line on its
 //! stdout, its stderr kept (the tail goes into every error).
 //!
-//! Every request waits at most the timeout for its answer. A timeout, an exit, a line that is not
-//! a JSON object, or an answer that breaks the protocol is a [`ControllerError`] of that
-//! scenario; the process is then killed and started again (with a new handshake) for the next
-//! scenario, so one broken run does not end the suite.
+//! Every request waits at most the timeout for its answer, and a whole scenario at most the
+//! scenario limit. A timeout, an exit, a closed stdin or stdout, a line that is not a JSON object
+//! or longer than [`MAX_ANSWER`], an answer that breaks the protocol, advances that make no
+//! progress, or an `ok: false` is a [`ControllerError`] of that scenario; the process is then
+//! killed and started again (with a new handshake) for the next scenario, so one broken run does
+//! not end the suite. What the adapter writes is shown with its control characters escaped.
 
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use nc_engine::input::{Condition, Input};
 use nc_engine::trace::{Event, TraceEvent, TraceMeta};
@@ -27,6 +29,14 @@ use crate::import::{self, Format};
 const STDERR_KEEP: usize = 4096;
 /// The longest answer line shown in an error (characters).
 const SHOW: usize = 200;
+/// The longest answer line read (bytes), as the JSON Lines importer's longest line: past it the
+/// answer is garbage and the adapter is restarted.
+pub const MAX_ANSWER: usize = 16 << 20;
+/// How many `advance` answers in a row may leave the clock where it was without stopping on a
+/// condition or ending.
+pub const MAX_IDLE_ADVANCES: u32 = 1000;
+/// The longest time one scenario may take by default (`--scenario-timeout-ms`).
+pub const DEFAULT_SCENARIO_LIMIT: Duration = Duration::from_secs(600);
 
 /// A running adapter process.
 struct Proc {
@@ -44,6 +54,13 @@ pub struct ProcessController {
     identity: Option<Identity>,
     meta: Option<TraceMeta>,
     loaded: bool,
+    /// The longest time one scenario (from its `load`) may take.
+    scenario_limit: Duration,
+    /// When the present scenario was loaded.
+    scenario_start: Option<Instant>,
+    /// The clock of the last `advance` answer, and how many in a row left it unchanged.
+    last_now: Option<Micros>,
+    idle_advances: u32,
 }
 
 /// Splits a command line into words: blanks separate, `'...'` and `"..."` quote, `\` escapes
@@ -95,10 +112,63 @@ pub fn split_command(line: &str) -> Result<Vec<String>, String> {
 }
 
 fn shorten(s: &str) -> String {
-    if s.chars().count() > SHOW {
-        format!("{}…", s.chars().take(SHOW).collect::<String>())
-    } else {
-        s.to_string()
+    crate::diag::printable(s, SHOW)
+}
+
+/// Reads the adapter's stdout line by line into `tx`, each line at most [`MAX_ANSWER`] bytes:
+/// a longer one (or one that is not UTF-8) is sent as an error and the reading stops.
+fn read_answers(stdout: impl Read, tx: &mpsc::Sender<std::io::Result<String>>) {
+    let mut r = BufReader::new(stdout);
+    loop {
+        let mut buf = Vec::new();
+        match (&mut r).take(MAX_ANSWER as u64 + 1).read_until(b'\n', &mut buf) {
+            Ok(0) => return,
+            Ok(_) if buf.last() == Some(&b'\n') || buf.len() <= MAX_ANSWER => {
+                if buf.last() == Some(&b'\n') {
+                    buf.pop();
+                }
+                if buf.last() == Some(&b'\r') {
+                    buf.pop();
+                }
+                let line = String::from_utf8(buf).map_err(|_| {
+                    std::io::Error::new(std::io::ErrorKind::InvalidData, "an answer line that is not UTF-8")
+                });
+                let bad = line.is_err();
+                if tx.send(line).is_err() || bad {
+                    return;
+                }
+            }
+            Ok(_) => {
+                let e = std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("an answer line longer than {MAX_ANSWER} bytes"),
+                );
+                let _ = tx.send(Err(e));
+                return;
+            }
+            Err(e) => {
+                let _ = tx.send(Err(e));
+                return;
+            }
+        }
+    }
+}
+
+/// The exit status of an adapter that should have ended: waited for briefly, else killed (an
+/// adapter that closed its stdin or stdout may well go on running).
+fn exit_status(child: &mut Child) -> String {
+    let until = Instant::now() + Duration::from_millis(500);
+    loop {
+        match child.try_wait() {
+            Ok(Some(s)) => return format!("exited ({s})"),
+            Ok(None) if Instant::now() < until => std::thread::sleep(Duration::from_millis(10)),
+            Ok(None) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return "closed its pipe but kept running (killed)".into();
+            }
+            Err(_) => return "exited (unknown status)".into(),
+        }
     }
 }
 
@@ -114,13 +184,28 @@ impl ProcessController {
             identity: None,
             meta: None,
             loaded: false,
+            scenario_limit: DEFAULT_SCENARIO_LIMIT,
+            scenario_start: None,
+            last_now: None,
+            idle_advances: 0,
         }
     }
 
-    /// The last lines of the controller's stderr.
+    /// The same controller with another limit on the time one scenario may take.
+    #[must_use]
+    pub fn with_scenario_limit(mut self, limit: Duration) -> Self {
+        self.scenario_limit = limit;
+        self
+    }
+
+    /// The last lines of the controller's stderr, control characters escaped.
     pub fn stderr_tail(&self) -> String {
         let buf = self.stderr.lock().map(|b| b.iter().copied().collect::<Vec<u8>>()).unwrap_or_default();
-        String::from_utf8_lossy(&buf).into_owned()
+        String::from_utf8_lossy(&buf)
+            .lines()
+            .map(|l| crate::diag::printable(l, STDERR_KEEP))
+            .collect::<Vec<_>>()
+            .join("\n")
     }
 
     fn fail(&mut self, kind: ErrorKind, message: impl Into<String>) -> ControllerError {
@@ -129,9 +214,9 @@ impl ProcessController {
             std::thread::sleep(Duration::from_millis(50));
         }
         let e = ControllerError { kind, message: message.into(), stderr_tail: self.stderr_tail() };
-        if kind != ErrorKind::Failed {
-            self.stop();
-        }
+        // Every controller error restarts the adapter, `ok: false` included
+        // (docs/adapter-protocol.md): the next scenario starts from a fresh handshake.
+        self.stop();
         e
     }
 
@@ -142,6 +227,7 @@ impl ProcessController {
             let _ = p.child.wait();
         }
         self.loaded = false;
+        self.scenario_start = None;
     }
 
     fn start(&mut self) -> Result<(), ControllerError> {
@@ -164,13 +250,7 @@ impl ProcessController {
         let stdout = child.stdout.take().expect("piped stdout");
         let mut stderr = child.stderr.take().expect("piped stderr");
         let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines() {
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
+        std::thread::spawn(move || read_answers(stdout, &tx));
         let keep = Arc::clone(&self.stderr);
         std::thread::spawn(move || {
             let mut buf = [0u8; 1024];
@@ -208,11 +288,11 @@ impl ProcessController {
             ));
         }
         let o = self.ok(o, &msg)?;
-        let text = |k: &str| o.get(k).and_then(Value::as_str).map(str::to_string);
+        let text = |k: &str| o.get(k).and_then(Value::as_str).map(|s| crate::diag::printable(s, SHOW));
         let dialects: Option<Vec<String>> = o
             .get("dialects")
             .and_then(Value::as_array)
-            .map(|a| a.iter().filter_map(|d| d.as_str().map(str::to_string)).collect());
+            .map(|a| a.iter().filter_map(|d| d.as_str().map(|s| crate::diag::printable(s, SHOW))).collect());
         match (text("name"), text("version"), dialects) {
             (Some(name), Some(version), Some(dialects)) => {
                 self.identity = Some(Identity { name, version, dialects });
@@ -234,25 +314,29 @@ impl ProcessController {
         let mut line = msg.to_string();
         line.push('\n');
         if let Err(e) = p.stdin.write_all(line.as_bytes()).and_then(|_| p.stdin.flush()) {
-            let status = p.child.wait().map(|s| s.to_string()).unwrap_or_else(|_| "unknown status".into());
-            return Err(
-                self.fail(ErrorKind::Crash, format!("the adapter exited ({status}) before `{op}`: {e}"))
-            );
+            let status = exit_status(&mut p.child);
+            return Err(self.fail(ErrorKind::Crash, format!("the adapter {status} before `{op}`: {e}")));
         }
-        match p.lines.recv_timeout(self.timeout) {
+        // The answer's wait: the timeout, or what is left of the scenario's time.
+        let left = self.scenario_start.map(|s| self.scenario_limit.saturating_sub(s.elapsed()));
+        let wait = left.map_or(self.timeout, |l| l.min(self.timeout));
+        match p.lines.recv_timeout(wait) {
             Ok(Ok(answer)) => Ok(answer),
             Ok(Err(e)) => Err(self.fail(ErrorKind::Garbage, format!("unreadable answer to `{op}`: {e}"))),
+            Err(RecvTimeoutError::Timeout) if wait < self.timeout => Err(self.fail(
+                ErrorKind::Timeout,
+                format!(
+                    "the scenario took longer than {} ms (--scenario-timeout-ms), waiting for `{op}`",
+                    self.scenario_limit.as_millis()
+                ),
+            )),
             Err(RecvTimeoutError::Timeout) => Err(self.fail(
                 ErrorKind::Timeout,
                 format!("no answer to `{op}` within {} ms", self.timeout.as_millis()),
             )),
             Err(RecvTimeoutError::Disconnected) => {
-                let status =
-                    p.child.wait().map(|s| s.to_string()).unwrap_or_else(|_| "unknown status".into());
-                Err(self.fail(
-                    ErrorKind::Crash,
-                    format!("the adapter exited ({status}) instead of answering `{op}`"),
-                ))
+                let status = exit_status(&mut p.child);
+                Err(self.fail(ErrorKind::Crash, format!("the adapter {status} instead of answering `{op}`")))
             }
         }
     }
@@ -266,8 +350,12 @@ impl ProcessController {
 
     fn object(&mut self, line: &str, msg: &Value) -> Result<Map<String, Value>, ControllerError> {
         let op = msg.get("op").and_then(Value::as_str).unwrap_or("?");
-        match serde_json::from_str::<Value>(line) {
+        match crate::json_keys::from_str(line) {
             Ok(Value::Object(o)) => Ok(o),
+            Err(e) if crate::json_keys::is_duplicate(&e) => Err(self.fail(
+                ErrorKind::Protocol,
+                format!("the answer to `{op}` gives a key twice: {}", crate::json_keys::message(&e)),
+            )),
             _ => Err(self.fail(
                 ErrorKind::Garbage,
                 format!("answer to `{op}` is not a JSON object: {}", shorten(line)),
@@ -280,7 +368,8 @@ impl ProcessController {
         match o.get("ok") {
             Some(Value::Bool(true)) => Ok(o),
             Some(Value::Bool(false)) => {
-                let why = o.get("error").and_then(Value::as_str).unwrap_or("(no `error` given)").to_string();
+                let why = o.get("error").and_then(Value::as_str).unwrap_or("(no `error` given)");
+                let why = crate::diag::printable(why, 2 * SHOW);
                 Err(self.fail(ErrorKind::Failed, format!("`{op}` failed: {why}")))
             }
             _ => Err(self.fail(ErrorKind::Protocol, format!("the answer to `{op}` has no `ok: true|false`"))),
@@ -373,6 +462,9 @@ impl Controller for ProcessController {
             self.loaded = false;
         }
         self.meta = wire::meta_of(job);
+        self.scenario_start = Some(Instant::now());
+        self.last_now = None;
+        self.idle_advances = 0;
         let msg = wire::load_json(job);
         let line = self.send_raw(&msg)?;
         let o = self.object(&line, &msg)?;
@@ -380,12 +472,13 @@ impl Controller for ProcessController {
             if let Some(r) = o.get("refused").and_then(Value::as_object) {
                 let line = r.get("line").and_then(Value::as_u64).unwrap_or(0) as u32;
                 let col = r.get("col").and_then(Value::as_u64).map(|c| c as u32);
-                let message = r.get("message").and_then(Value::as_str).unwrap_or("").to_string();
+                let message =
+                    crate::diag::printable(r.get("message").and_then(Value::as_str).unwrap_or(""), 2 * SHOW);
                 self.loaded = true;
                 return Ok(Loaded::Refused { line, col, message });
             }
             if let Some(why) = o.get("unsupported").and_then(Value::as_str) {
-                return Ok(Loaded::Unsupported(why.to_string()));
+                return Ok(Loaded::Unsupported(crate::diag::printable(why, 2 * SHOW)));
             }
         }
         self.ok(o, &msg)?;
@@ -407,7 +500,28 @@ impl Controller for ProcessController {
             Some(v) => v.as_u64().map(|k| Some(k as usize)).ok_or(()),
         };
         match (now_us, ended, stopped_on) {
-            (Some(now_us), Some(ended), Ok(stopped_on)) => Ok(Advanced { now_us, stopped_on, ended }),
+            (Some(now_us), Some(ended), Ok(stopped_on)) => {
+                // Progress: the clock moves on, a condition stops it, or the run ends.
+                if self.last_now.is_some_and(|last| now_us < last) {
+                    return Err(self.fail(
+                        ErrorKind::Protocol,
+                        format!("`advance` answered now_us {now_us}, before the {} of the last answer", self.last_now.unwrap_or(0)),
+                    ));
+                }
+                if !ended && stopped_on.is_none() && self.last_now == Some(now_us) {
+                    self.idle_advances += 1;
+                    if self.idle_advances >= MAX_IDLE_ADVANCES {
+                        return Err(self.fail(
+                            ErrorKind::Protocol,
+                            format!("{MAX_IDLE_ADVANCES} `advance` answers in a row without progress (now_us stays {now_us}, no stop, no end)"),
+                        ));
+                    }
+                } else {
+                    self.idle_advances = 0;
+                }
+                self.last_now = Some(now_us);
+                Ok(Advanced { now_us, stopped_on, ended })
+            }
             _ => Err(self.fail(
                 ErrorKind::Protocol,
                 "the `advance` answer needs `now_us` (integer), `ended` (boolean), `stopped_on` (index or null)",

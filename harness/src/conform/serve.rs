@@ -2,11 +2,12 @@
 //! `nc-conform serve` answers with the reference engine, so an adapter in another language can
 //! delegate to it, and the protocol is tested from both ends.
 
-use std::io::{BufRead, Write};
+use std::io::{BufRead, Read, Write};
 
 use nc_engine::trace::TraceMeta;
 use serde_json::{json, Map, Value};
 
+use super::process::MAX_ANSWER;
 use super::{wire, Controller, Loaded, PROTOCOL};
 
 /// Answers requests read from `input` on `output` until `quit` or the end of the input.
@@ -14,14 +15,30 @@ use super::{wire, Controller, Loaded, PROTOCOL};
 /// # Errors
 ///
 /// Reading or writing failed.
-pub fn serve(ctl: &mut dyn Controller, input: impl BufRead, mut output: impl Write) -> std::io::Result<()> {
+pub fn serve(
+    ctl: &mut dyn Controller,
+    mut input: impl BufRead,
+    mut output: impl Write,
+) -> std::io::Result<()> {
     let mut meta: Option<TraceMeta> = None;
-    for line in input.lines() {
-        let line = line?;
+    let mut buf = Vec::new();
+    loop {
+        // One request line, at most MAX_ANSWER bytes: a longer one is answered and ends serving.
+        buf.clear();
+        if input.by_ref().take(MAX_ANSWER as u64 + 1).read_until(b'\n', &mut buf)? == 0 {
+            break;
+        }
+        if buf.len() > MAX_ANSWER && buf.last() != Some(&b'\n') {
+            output.write_all(failure(format!("a request line longer than {MAX_ANSWER} bytes")).as_bytes())?;
+            output.write_all(b"\n")?;
+            output.flush()?;
+            return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, "a request line too long"));
+        }
+        let line = String::from_utf8_lossy(&buf);
         if line.trim().is_empty() {
             continue;
         }
-        let (answer, quit) = match serde_json::from_str::<Value>(&line) {
+        let (answer, quit) = match crate::json_keys::from_str(line.trim_end()) {
             Ok(Value::Object(o)) => {
                 let op = o.get("op").and_then(Value::as_str).unwrap_or("").to_string();
                 (answer(ctl, &op, &o, &mut meta), op == "quit")

@@ -17,20 +17,26 @@ use crate::diag::InputError;
 use crate::scenario::load;
 
 /// The scenario files under `dir` (`.yaml`/`.yml`, recursively, sorted by path).
+/// Each directory is entered once, however many links lead to it (a symbolic link to `.` made
+/// the walk endless).
 pub fn scenario_files(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
-    collect(dir, &mut out);
+    let mut seen = std::collections::HashSet::new();
+    collect(dir, &mut out, &mut seen);
     out
 }
 
-fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
+fn collect(dir: &Path, out: &mut Vec<PathBuf>, seen: &mut std::collections::HashSet<PathBuf>) {
+    if !std::fs::canonicalize(dir).is_ok_and(|c| seen.insert(c)) {
+        return;
+    }
     let Ok(rd) = std::fs::read_dir(dir) else { return };
     let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
     entries.sort();
     for p in entries {
         if p.is_dir() {
-            collect(&p, out);
-        } else if p.extension().is_some_and(|e| e == "yaml" || e == "yml") {
+            collect(&p, out, seen);
+        } else if p.is_file() && p.extension().is_some_and(|e| e == "yaml" || e == "yml") {
             out.push(p);
         }
     }
@@ -263,7 +269,7 @@ where
 
 /// The `dialect:` of a scenario file, read cheaply (None when not found).
 fn dialect_of(path: &Path) -> Option<String> {
-    let text = std::fs::read_to_string(path).ok()?;
+    let text = String::from_utf8(crate::input::read_capped(path, crate::input::YAML).ok()?).ok()?;
     text.lines()
         .find_map(|l| l.strip_prefix("dialect:"))
         .map(|d| d.trim().trim_matches(['"', '\'']).to_string())

@@ -155,7 +155,7 @@ impl Line<'_> {
 
 /// Parses one line into a JSON object (errors with serde_json's column).
 fn parse<'a>(ctx: &'a Ctx, no: u64, text: &'a [u8]) -> Result<Line<'a>, ImportError> {
-    match serde_json::from_slice::<Value>(text) {
+    match crate::json_keys::from_slice(text) {
         Ok(Value::Object(obj)) => Ok(Line { ctx, no, text, obj }),
         Ok(v) => Err(ctx
             .err(ErrorKind::BadRow, no, 1, format!("a line that is not an object: {v}"))
@@ -165,10 +165,12 @@ fn parse<'a>(ctx: &'a Ctx, no: u64, text: &'a [u8]) -> Result<Line<'a>, ImportEr
             let kind = if e.is_eof() { ErrorKind::Truncated } else { ErrorKind::BadRow };
             let col = e.column().max(1) as u64;
             let col = char_col(text, (col - 1) as usize);
-            Err(ctx
-                .err(kind, no, col, format!("not JSON: {e}"))
-                .expected("one JSON object per line")
-                .with_line(text))
+            let message = if crate::json_keys::is_duplicate(&e) {
+                format!("a key given twice: {}", crate::json_keys::message(&e))
+            } else {
+                format!("not JSON: {e}")
+            };
+            Err(ctx.err(kind, no, col, message).expected("one JSON object per line").with_line(text))
         }
     }
 }
@@ -380,11 +382,12 @@ impl JsonlSource {
                     "reset" => EndReason::Reset,
                     "stopped" => EndReason::Stopped,
                     "time_limit" => EndReason::TimeLimit,
+                    "output_limit" => EndReason::OutputLimit,
                     r => {
                         return Err(l.err(
                             "reason",
                             format!("unknown end reason `{r}`"),
-                            "program_end, alarm, reset, stopped or time_limit",
+                            "program_end, alarm, reset, stopped, time_limit or output_limit",
                         ))
                     }
                 };

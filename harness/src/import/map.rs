@@ -206,8 +206,7 @@ impl ColumnMap {
     /// The file cannot be read, or an error of [`ColumnMap::from_yaml`].
     pub fn load(path: &std::path::Path) -> Result<ColumnMap, InputError> {
         let name = path.display().to_string();
-        let text =
-            std::fs::read_to_string(path).map_err(|e| InputError::new(&name, format!("cannot read: {e}")))?;
+        let text = crate::input::read_utf8(path, crate::input::YAML)?;
         ColumnMap::from_yaml(&name, &text)
     }
 

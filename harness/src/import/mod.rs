@@ -244,6 +244,14 @@ pub fn from_reader(
             Format::detect(head)
         }
     };
+    // An empty file is said to be empty, whatever its format (not "a CSV trace needs a map").
+    let head = reader.fill_buf().map_err(|e| ctx.err(ErrorKind::Io, 0, 0, format!("cannot read: {e}")))?;
+    if head.iter().all(u8::is_ascii_whitespace) {
+        let what = if head.is_empty() { "the file is empty" } else { "the file holds only blank space" };
+        return Err(ctx
+            .err(ErrorKind::Header, 0, 0, what)
+            .expected("a recorded trace: JSON Lines, CSV, VCD or MTConnect SHDR"));
+    }
     let (meta, src): (RecordedMeta, Box<dyn Source>) = match format {
         Format::Jsonl => jsonl::open(&mut ctx, reader)?,
         Format::Csv => {
@@ -299,6 +307,9 @@ pub(crate) fn recorded_alarm(code: &str, text: &str) -> Alarm {
     }
 }
 
+/// How far past its limit an over-long line is skipped looking for its end (64 MiB).
+const SKIP_MAX: u64 = 64 << 20;
+
 /// Reads one line (up to and without `\n`, and a `\r` before it) into `buf`; `Ok(false)` at the
 /// end of the input. A line longer than `max` bytes is an error of its line.
 pub(crate) fn read_line(
@@ -319,8 +330,17 @@ pub(crate) fn read_line(
     if buf.last() == Some(&b'\n') {
         buf.pop();
     } else if buf.len() > max {
-        // Skip the rest of the line, so that a lenient reader goes on at the next one.
-        r.skip_until(b'\n').map_err(|e| ctx.err(ErrorKind::Io, line_no, 0, format!("cannot read: {e}")))?;
+        // Skip the rest of the line, so that a lenient reader goes on at the next one; a line
+        // that does not end within `SKIP_MAX` more bytes (`/dev/zero`) ends the reading.
+        let skipped = r
+            .take(SKIP_MAX)
+            .skip_until(b'\n')
+            .map_err(|e| ctx.err(ErrorKind::Io, line_no, 0, format!("cannot read: {e}")))?;
+        if skipped as u64 == SKIP_MAX {
+            return Err(ctx
+                .err(ErrorKind::Io, line_no, 1, format!("a line longer than {max} bytes that does not end"))
+                .expected("a line end"));
+        }
         return Err(ctx
             .err(ErrorKind::BadRow, line_no, 1, format!("a line longer than {max} bytes"))
             .expected("a line end"));

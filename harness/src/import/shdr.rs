@@ -81,7 +81,20 @@ enum Key {
 /// Whether a first line looks like SHDR: an ISO date, then `|`.
 pub(crate) fn looks_like_shdr(line: &[u8]) -> bool {
     let ts = line.split(|&c| c == b'|').next().unwrap_or(b"");
-    ts.len() < line.len() && parse_time(ts).is_some()
+    ts.len() < line.len() && (parse_time(ts).is_some() || timestamp_shaped(ts))
+}
+
+/// Whether `s` has the shape `dddd-dd-ddTdd:dd:dd…` whatever its values (a timestamp of 1900
+/// still makes the file SHDR, with a bad timestamp, not a CSV file without a map).
+fn timestamp_shaped(s: &[u8]) -> bool {
+    let s = s.trim_ascii();
+    s.len() >= 19
+        && s.iter().take(19).enumerate().all(|(i, c)| match i {
+            4 | 7 => *c == b'-',
+            10 => matches!(c, b'T' | b' '),
+            13 | 16 => *c == b':',
+            _ => c.is_ascii_digit(),
+        })
 }
 
 /// `YYYY-MM-DDTHH:MM:SS[.fraction][Z]` as µs since the Unix epoch.
@@ -269,8 +282,11 @@ impl ShdrSource {
             err(
                 ErrorKind::BadRow,
                 0,
-                format!("bad timestamp `{}`", String::from_utf8_lossy(fields[0].1)),
-                "YYYY-MM-DDTHH:MM:SS[.ffffff]Z",
+                format!(
+                    "bad timestamp `{}`",
+                    crate::diag::printable(&String::from_utf8_lossy(fields[0].1), 60)
+                ),
+                "YYYY-MM-DDTHH:MM:SS[.ffffff]Z, from 1970 on",
             )
         })?;
         if let Some(last) = self.last_t.filter(|l| t < *l) {

@@ -20,6 +20,8 @@ use std::io::BufRead;
 use nc_engine::trace::{axis_index, AxisSpec, Event, Phase, Sample, Signal, TraceEvent};
 use vcd::{Command, IdCode, ScopeItem, Value, VarType};
 
+mod scope_depth;
+
 use super::num::f64_to_fixed;
 use super::{Ctx, ErrorKind, Format, ImportError, RecordedMeta, Source};
 
@@ -117,7 +119,7 @@ pub(crate) fn open(
     ctx: &mut Ctx,
     r: Box<dyn BufRead>,
 ) -> Result<(RecordedMeta, Box<dyn Source>), ImportError> {
-    let mut p = vcd::Parser::new(r);
+    let mut p = vcd::Parser::new(Box::new(scope_depth::ScopeDepth::new(r)) as Box<dyn BufRead>);
     let header = p.parse_header().map_err(|e| {
         let mut e = io_err(ctx, p.line(), &e);
         if e.kind != ErrorKind::Io {

@@ -48,10 +48,15 @@ pub struct Scenario {
 ///
 /// Unreadable files, YAML errors, unknown keys, bad values, program syntax errors, each located.
 pub fn load(path: &Path, name: &str) -> Result<Scenario, InputError> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| InputError::new(name, format!("cannot read: {e}")))?;
+    let bytes = crate::input::read_capped(path, crate::input::YAML).map_err(|m| InputError::new(name, m))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| InputError::new(name, "cannot read: stream did not contain valid UTF-8"))?;
     load_text(&text, name, path.parent().unwrap_or(Path::new(".")))
 }
+
+/// The most samples a scenario's run may write (`options.time_limit_ms` / `options.sample_us`):
+/// its trace is held in memory, about 100 bytes a sample.
+pub const MAX_SAMPLES: u64 = 1_000_000;
 
 /// [`load`] from text; `dir` is where `program_file` paths start.
 ///
@@ -107,6 +112,22 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
         let (trigger, input) = input(&ctx, entry)?;
         inputs.inputs.push(nc_engine::input::ScheduledInput { trigger, input });
     }
+    // A scenario's trace is held in memory: its samples are bounded (docs/input-limits.md).
+    let samples = match file.options.sample_us {
+        0 => 0,
+        s => file.options.time_limit_ms.saturating_mul(1000) / s,
+    };
+    if samples > MAX_SAMPLES {
+        let mut e = InputError::new(
+            ctx.file,
+            format!(
+                "options: time_limit_ms {} at sample_us {} would hold {samples} samples, more than the {MAX_SAMPLES} a scenario may",
+                file.options.time_limit_ms, file.options.sample_us
+            ),
+        );
+        e.expected = Some("a larger sample_us or a shorter time_limit_ms".into());
+        return Err(e);
+    }
     let opts = RunOptions {
         sample_us: file.options.sample_us,
         time_limit_us: file.options.time_limit_ms.saturating_mul(1000),
@@ -149,13 +170,15 @@ fn program(file: &ScenarioFile, machine: &Machine, ctx: &Ctx, dir: &Path) -> Res
         }
         (None, Some(f)) => {
             let path: PathBuf = dir.join(&f.value);
-            let text = std::fs::read_to_string(&path).map_err(|err| {
-                ctx.err(
-                    f,
-                    format!("cannot read program file {}: {err}", path.display()),
-                    "a readable file, relative to the scenario",
-                )
-            })?;
+            let text = crate::input::read_capped(&path, crate::input::PROGRAM)
+                .map_err(|err| {
+                    ctx.err(
+                        f,
+                        format!("program file {}: {err}", path.display()),
+                        "a readable file, relative to the scenario",
+                    )
+                })
+                .map(crate::input::lossy_text)?;
             let shown = path.display().to_string();
             machine.parse(&text).map_err(|e| {
                 let span = Span::from_line_col(&text, e.line, e.col, e.len);

@@ -491,7 +491,9 @@ impl FanucInterp {
         } else {
             (MAX_FEED_MIN_NM, "0 < F ≤ 240000 mm/min (G94)")
         };
-        if !(0..=max).contains(&nm) {
+        // F0 is 0011 when a move needs it; a feed finer than the least input increment is out of
+        // range (a feed of 1 nm/min would run for years, issue 15).
+        if !(0..=max).contains(&nm) || (nm != 0 && nm < self.set.increment_nm.max(1)) {
             return Err(w.alarm(
                 AlarmKind::WordOutOfRange,
                 &fw,

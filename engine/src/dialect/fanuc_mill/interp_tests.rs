@@ -181,6 +181,7 @@ fn arc_end_off_the_circle_alarms_only_with_a_3410_tolerance() {
 #[case::feed_range("G01 X1 F240001", "NC-1001", 1, Some(8))]
 #[case::feed_rev_range("G95 G01 X1 F501", "NC-1001", 1, Some(12))]
 #[case::feed_negative("G01 X1 F-1", "NC-1001", 1, Some(8))]
+#[case::feed_below_increment("G01 X1 F0.000001", "NC-1001", 1, Some(8))]
 #[case::s_range("S8001", "NC-1001", 1, Some(1))]
 #[case::k_range("G81 X0 Z-5 R1 F100 K10000", "NC-1001", 1, Some(20))]
 #[case::p_range("G04 P-1", "NC-1001", 1, Some(5))]

@@ -163,11 +163,21 @@ impl GskInterp {
     fn feed_word(&mut self, w: &Words) -> Result<(), Alarm> {
         if let Some(f) = w.get('F') {
             let v = f.value.scaled(self.units.unit_nm()) as f64;
-            if v <= 0.0 {
+            // Above 0 and not finer than the least input increment (a feed of 1 nm/min would
+            // run for years, issue 15).
+            if v < self.units.increment_nm.max(1) as f64 {
                 return Err(w.alarm(
                     AlarmKind::WordOutOfRange,
                     &f,
-                    format!("F{}: feed must be > 0", f.value.display()),
+                    if v <= 0.0 {
+                        format!("F{}: feed must be > 0", f.value.display())
+                    } else {
+                        format!(
+                            "F{}: feed finer than the least input increment ({} mm)",
+                            f.value.display(),
+                            self.units.increment_nm as f64 / NM_PER_MM as f64
+                        )
+                    },
                 ));
             }
             self.feed = Some(v);
@@ -343,7 +353,7 @@ impl GskInterp {
         let (lead_nm, right_hand) = match (w.get('F'), w.get('I')) {
             (Some(f), None) => {
                 let v = f.value.scaled(self.units.unit_nm());
-                if v == 0 || v.unsigned_abs() > 500 * NM_PER_MM as u64 {
+                if v.unsigned_abs() < NM_PER_MM as u64 / 10_000 || v.unsigned_abs() > 500 * NM_PER_MM as u64 {
                     return Err(w.alarm(
                         AlarmKind::WordOutOfRange,
                         &f,

@@ -178,7 +178,7 @@ impl HeiInterp {
             Some(KFeed::Max) => true,
             Some(KFeed::Rate(f)) => {
                 let v = f.value.scaled(NM_PER_MM);
-                if v <= 0 || v > 99_999_999 * NM_PER_MM / 1000 {
+                if !(NM_PER_MM / 1000..=99_999_999 * NM_PER_MM / 1000).contains(&v) {
                     return Err(located(
                         AlarmKind::WordOutOfRange,
                         f,

@@ -132,7 +132,7 @@ impl KndInterp {
         let lead = match (w.get('F'), w.get('I')) {
             (Some(f), None) => {
                 let v = f.value.scaled(self.units.unit_nm());
-                if v <= 0 || v > 500 * NM_PER_MM {
+                if !(NM_PER_MM / 10_000..=500 * NM_PER_MM).contains(&v) {
                     return Err(w.alarm(
                         AlarmKind::WordOutOfRange,
                         &f,
@@ -368,11 +368,20 @@ impl Interpreter for KndInterp {
         if !threading && nonmodal.is_none() {
             if let Some(f) = w.get('F') {
                 let v = f.value.scaled(self.units.unit_nm());
-                if v <= 0 {
+                // Above 0 and not finer than the least input increment (issue 15).
+                if v < self.units.increment_nm.max(1) {
                     return Err(w.alarm(
                         AlarmKind::WordOutOfRange,
                         &f,
-                        format!("F{}: feed must be > 0", f.value.display()),
+                        if v <= 0 {
+                            format!("F{}: feed must be > 0", f.value.display())
+                        } else {
+                            format!(
+                                "F{}: feed finer than the least input increment ({} mm)",
+                                f.value.display(),
+                                self.units.increment_nm as f64 / NM_PER_MM as f64
+                            )
+                        },
                     ));
                 }
                 self.feed = Some(v as f64);

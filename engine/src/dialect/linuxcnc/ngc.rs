@@ -246,8 +246,24 @@ impl Cur<'_> {
     }
 }
 
+/// The longest line LinuxCNC's interpreter reads, in bytes without the line ending: `rs274`
+/// answers "Command too long" from 253 bytes on (LCNC-LEX-01). The limit also bounds how deep an
+/// expression can nest (`[[[..]]]`, `-----1`, `SIN[SIN[..]]`, a long `1+1+..` sum), so the
+/// recursive parser and evaluator below never follow an unbounded depth.
+pub const MAX_LINE_BYTES: usize = 252;
+
 /// Parses one line (without its line ending). Never panics.
 pub fn parse_line(text: &str, line: u32) -> Result<Line, ParseError> {
+    if text.len() > MAX_LINE_BYTES {
+        return Err(ParseError {
+            line,
+            col: u32::try_from(text.char_indices().take_while(|(i, _)| *i < MAX_LINE_BYTES).count() + 1)
+                .unwrap_or(u32::MAX),
+            len: 1,
+            message: "Command too long".into(),
+            expected: format!("a line of at most {MAX_LINE_BYTES} characters (LinuxCNC's limit)"),
+        });
+    }
     let mut c = Cur { chars: text.chars().collect(), i: 0, line, _src: text };
     let mut out = Line { line, ..Line::default() };
     c.skip_blanks();
@@ -645,6 +661,11 @@ mod tests {
         assert_eq!((e.col, e.message.as_str()), (7, "Unclosed comment found"));
         assert!(parse_line("o1 frobnicate", 1).is_err());
         assert!(parse_line("G1 X$", 1).is_err());
+        // rs274 refuses a line of 253 bytes ("Command too long") and reads one of 252.
+        let at = |n: usize| format!("G0 X1 ({})", "a".repeat(n - 8));
+        assert!(parse_line(&at(252), 1).is_ok());
+        let e = parse_line(&at(253), 7).unwrap_err();
+        assert_eq!((e.line, e.col, e.message.as_str()), (7, 253, "Command too long"));
         assert_eq!(parse_line("O0001 (name)", 1).unwrap().oword, None);
     }
 }
