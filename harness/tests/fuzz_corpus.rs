@@ -83,7 +83,7 @@ fn import_shdr_corpus_and_regressions() {
 
 #[test]
 fn cli_files_corpus_and_regressions() {
-    replay("cli_files", nc_conform::fuzz::cli_files);
+    replay("cli_files", nc_conform::cli::fuzz_files::cli_files);
 }
 
 #[test]

@@ -99,7 +99,7 @@ pub fn adapter_lines(data: &[u8]) {
     }
 }
 
-/// The program of [`super::cli_files::SCENARIO`].
+/// The program of [`super::SCENARIO`].
 const SCENARIO_PROGRAM: &str = "G90 G0 X0 Y0 Z10\nM29 S1000\nG91 G99 G84 X10 R-8 Z-6 F1000 L2\nG80\nM30\n";
 
 /// The scratch directory of this process, the scenario the runner drives and the event lines of
@@ -109,7 +109,7 @@ fn fixtures() -> &'static (PathBuf, Scenario, Vec<String>) {
     F.get_or_init(|| {
         let dir = std::env::temp_dir().join(format!("nc-conform-fuzz-adapter-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("scratch directory");
-        let s = load_text(super::cli_files::SCENARIO, "fuzz.yaml", &dir).expect("the fixture scenario loads");
+        let s = load_text(super::SCENARIO, "fuzz.yaml", &dir).expect("the fixture scenario loads");
         let trace = s.machine.run_to_trace(&s.program, &s.opts);
         let lines = wire::event_lines(&trace.meta, &trace.events);
         (dir, s, lines)

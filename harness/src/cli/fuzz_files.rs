@@ -1,4 +1,6 @@
-//! Fuzz target `cli_files`: the bytes as one of the files a user hands to the command line,
+//! Fuzz target `cli_files` (logic here, in the command line, since it drives the command line;
+//! the target and `harness/tests/fuzz_corpus.rs` call [`cli_files`]): the bytes as one of the
+//! files a user hands to the command line,
 //! read by `nc-conform run` or `nc-conform check` exactly as typed at a shell (the arguments go
 //! through the same `clap` parser and the same subcommand code as the binary's).
 //!
@@ -19,28 +21,11 @@ use std::sync::OnceLock;
 use arbitrary::{Arbitrary, Unstructured};
 use clap::Parser;
 
-use crate::cli::{Cli, Command};
+use super::{Cli, Command};
+use crate::fuzz::SCENARIO;
 
 /// The largest file an input writes (its bytes repeated), bytes.
 pub const MAX_FILE_BYTES: usize = 8 << 20;
-
-/// A small scenario (fanuc-mill, two holes with L2), the fixture of `check` and of the parameter
-/// files of a scenario-less run.
-pub const SCENARIO: &str = "\
-title: L2 in G91 taps two holes 10 mm apart
-rules: [FAN-LEX-03]
-dialect: fanuc-mill
-program: |
-  G90 G0 X0 Y0 Z10
-  M29 S1000
-  G91 G99 G84 X10 R-8 Z-6 F1000 L2
-  G80
-  M30
-expect:
-  alarms: []
-  end:
-    reason: program_end
-";
 
 /// A short program per dialect that runs to its end, for the parameter-file role.
 const PROGRAMS: [(&str, &str, &str); 5] = [
@@ -132,8 +117,8 @@ fn cli(args: &[&str]) -> u8 {
     let argv = std::iter::once("nc-conform").chain(args.iter().copied());
     let parsed = Cli::try_parse_from(argv).unwrap_or_else(|e| panic!("bad fuzz command line {args:?}: {e}"));
     match parsed.command {
-        Command::Run(a) => crate::cli::run::run(&a),
-        Command::Check(a) => crate::cli::check::run(&a),
+        Command::Run(a) => super::run::run(&a),
+        Command::Check(a) => super::check::run(&a),
         other => panic!("not a file-reading command: {other:?}"),
     }
 }
