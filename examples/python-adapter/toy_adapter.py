@@ -7,11 +7,15 @@ engine (`nc-conform serve`), which it runs as a child process. Replace `Machine`
 your own controller (a simulator, a PLC bridge, a machine on the bench) and keep the rest.
 
 Usage: toy_adapter.py [--nc-conform PATH] [--dialects gsk-lathe,fanuc-mill]
+Without --nc-conform it finds the engine itself (see `find_nc_conform`), so that
+`nc-conform conform --adapter "python3 examples/python-adapter/toy_adapter.py"` works as written.
 Standard library only.
 """
 
 import argparse
 import json
+import os
+import shutil
 import subprocess
 import sys
 
@@ -47,13 +51,28 @@ class Machine:
             self.proc.wait(timeout=5)
 
 
+def find_nc_conform():
+    """The nc-conform binary when --nc-conform is not given: $NC_CONFORM if set, else the
+    nc-conform that started this adapter (`nc-conform conform` is its parent process; Linux's
+    /proc names its executable), else `nc-conform` on the PATH."""
+    if os.environ.get("NC_CONFORM"):
+        return os.environ["NC_CONFORM"]
+    try:
+        parent = os.readlink(f"/proc/{os.getppid()}/exe")
+        if os.path.basename(parent).startswith("nc-conform"):
+            return parent
+    except OSError:
+        pass
+    return shutil.which("nc-conform") or "nc-conform"
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--nc-conform", default="nc-conform")
+    ap.add_argument("--nc-conform", default=None, help="the nc-conform binary (default: see find_nc_conform)")
     ap.add_argument("--dialects", default="gsk-lathe,fanuc-mill,knd-lathe")
     args = ap.parse_args()
     dialects = [d for d in args.dialects.split(",") if d]
-    machine = Machine(args.nc_conform)
+    machine = Machine(args.nc_conform or find_nc_conform())
     for line in sys.stdin:
         if not line.strip():
             continue

@@ -12,7 +12,15 @@
 //! - [`scenario_yaml`]: the bytes as a scenario file: loading never panics, its errors render,
 //!   and a scenario that loads runs and renders (report, timing diagram, event listing, VCD);
 //! - [`engine_case`]: the bytes decoded as a structured campaign [`Case`] (`arbitrary`): the run
-//!   keeps every invariant of `nc_engine::invariants` (`docs/invariants.md`).
+//!   keeps every invariant of `nc_engine::invariants` (`docs/invariants.md`);
+//! - `cli_files`: the bytes as a file handed to `nc-conform run` / `check` (program, scenario,
+//!   parameters, recorded trace, column map, tolerances), at realistic sizes or as a special file,
+//!   through the command line itself: its logic is in `src/cli/fuzz_files.rs`, part of the
+//!   command line, which library modules never import;
+//! - [`nesting`]: deep nesting built from a structured input (LinuxCNC expressions, o-words,
+//!   recursion, VCD scopes), as deep as [`nesting::MAX_DEPTH`];
+//! - [`adapter_lines`]: the adapter runner of `nc-conform conform` against a fuzzed fake adapter
+//!   process (its answer lines and how it misbehaves after them).
 //!
 //! # Bounded cost
 //!
@@ -27,6 +35,12 @@
 
 use std::path::{Component, Path};
 
+pub mod adapter_lines;
+pub mod nesting;
+
+pub use adapter_lines::adapter_lines;
+pub use nesting::nesting;
+
 use arbitrary::{Arbitrary, Unstructured};
 use nc_engine::invariants::time_ordered_ends;
 use nc_engine::{Machine, RunOptions};
@@ -35,6 +49,24 @@ use crate::campaign::case::{Compare, GenInput};
 use crate::campaign::{check_case, Case};
 use crate::render::{events::event_listing, timing::timing_diagram, vcd::write_vcd};
 use crate::scenario::{load, run, schema::ScenarioFile};
+
+/// A small scenario (fanuc-mill, two holes with L2), the fixture of the `cli_files` and
+/// `adapter_lines` targets.
+pub const SCENARIO: &str = "\
+title: L2 in G91 taps two holes 10 mm apart
+rules: [FAN-LEX-03]
+dialect: fanuc-mill
+program: |
+  G90 G0 X0 Y0 Z10
+  M29 S1000
+  G91 G99 G84 X10 R-8 Z-6 F1000 L2
+  G80
+  M30
+expect:
+  alarms: []
+  end:
+    reason: program_end
+";
 
 /// Simulated time limit of a fuzzed G-code run, µs.
 pub const GCODE_TIME_LIMIT_US: u64 = 60_000_000;

@@ -1,4 +1,4 @@
-//! Replays the fuzz seed corpora (`fuzz/corpus/<target>/`, importer targets included) and every stored crash input
+//! Replays the fuzz seed corpora (`fuzz/corpus/<target>/`, importer and entry-point targets included) and every stored crash input
 //! (`fuzz/regressions/<target>/`) through the targets' logic in `nc_conform::fuzz`, on stable,
 //! so that a crash once found and fixed stays fixed. One test per target; a failure names every
 //! input that panicked, with its panic message.
@@ -79,4 +79,19 @@ fn import_vcd_corpus_and_regressions() {
 #[test]
 fn import_shdr_corpus_and_regressions() {
     replay("import_shdr", nc_conform::import::fuzz::import_shdr);
+}
+
+#[test]
+fn cli_files_corpus_and_regressions() {
+    replay("cli_files", nc_conform::cli::fuzz_files::cli_files);
+}
+
+#[test]
+fn nesting_corpus_and_regressions() {
+    replay("nesting", nc_conform::fuzz::nesting);
+}
+
+#[test]
+fn adapter_lines_corpus_and_regressions() {
+    replay("adapter_lines", nc_conform::fuzz::adapter_lines);
 }

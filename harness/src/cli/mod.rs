@@ -22,6 +22,7 @@ use clap::{Parser, Subcommand};
 pub mod campaign;
 pub mod check;
 pub mod conform;
+pub mod fuzz_files;
 pub mod progress;
 pub mod run;
 pub mod run_scenario;

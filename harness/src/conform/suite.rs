@@ -275,6 +275,14 @@ where
             .with_ignored_flag(skip)
         })
         .collect();
+    let ignored = trials.iter().filter(|t| t.has_ignored_flag()).count();
+    if ignored > 0 {
+        // Said where `cargo test` prints the ignored ones, so that nobody takes them for a gap.
+        eprintln!(
+            "note: {ignored} scenario(s) listed as ignored: their dialect is not one the controller declares ({})",
+            dialects.join(", ")
+        );
+    }
     libtest_mimic::run(&args, trials).exit();
 }
 
