@@ -202,7 +202,9 @@ pub fn run_engine(text: &str) -> Result<Outcome, String> {
                             let (m, back) = (Move { kind: 'R', p, line, tol: 1e-5 }, cur);
                             push(&mut o.moves, &mut cur, m, back)
                         }
-                        FollowKind::Return { .. } | FollowKind::Through { .. } | FollowKind::Unsynced => cur = p,
+                        FollowKind::Return { .. } | FollowKind::Through { .. } | FollowKind::Unsynced => {
+                            cur = p
+                        }
                         FollowKind::Brake { .. } => {}
                     }
                 }

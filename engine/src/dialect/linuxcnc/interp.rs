@@ -27,6 +27,10 @@ pub const MAX_LINES: u64 = 1_000_000;
 pub const MAX_STEPS: usize = 2_000_000;
 /// Deepest subroutine nesting (LinuxCNC: "Too many subroutine levels").
 const MAX_DEPTH: usize = 10;
+/// Most o-word blocks (if, while, do, repeat, a subroutine's body) open inside one another at a
+/// time: the interpreter walks them recursively, so the depth is bounded whatever the program
+/// (a fuzzed program of 5 000 nested `if` blocks overflowed the stack, issue 15).
+const MAX_NESTING: usize = 200;
 
 /// How a run of statements ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -53,6 +57,8 @@ pub struct LcncInterp {
     subs: BTreeMap<String, Vec<Line>>,
     gather: Option<Gather>,
     depth: usize,
+    /// o-word blocks open now (at most [`MAX_NESTING`]).
+    nesting: usize,
     budget: u64,
     /// Every line of the program, for subroutines defined after their call and `M98`.
     program: Vec<Line>,
@@ -69,6 +75,7 @@ impl LcncInterp {
             subs: BTreeMap::new(),
             gather: None,
             depth: 0,
+            nesting: 0,
             budget: 0,
             program: Vec::new(),
             returned: None,
@@ -81,6 +88,17 @@ impl LcncInterp {
 
     /// Runs statements in order; structures are found by their labels.
     fn run_lines(&mut self, lines: &[Line], out: &mut Vec<Step>) -> Result<Flow, Alarm> {
+        if self.nesting >= MAX_NESTING {
+            let line = lines.first().map_or(0, |l| l.line);
+            return Err(Self::err(line, format!("Too many nested o-word blocks (more than {MAX_NESTING})")));
+        }
+        self.nesting += 1;
+        let flow = self.run_nested(lines, out);
+        self.nesting -= 1;
+        flow
+    }
+
+    fn run_nested(&mut self, lines: &[Line], out: &mut Vec<Step>) -> Result<Flow, Alarm> {
         let mut i = 0;
         while i < lines.len() {
             let l = &lines[i];
@@ -425,6 +443,7 @@ impl Interpreter for LcncInterp {
         self.m.reset(pos);
         self.gather = None;
         self.depth = 0;
+        self.nesting = 0;
     }
 
     fn set_position(&mut self, pos: Pos) {
