@@ -194,6 +194,17 @@ pub fn run_engine(text: &str) -> Result<Outcome, String> {
                     let m = mv('A', target);
                     push(&mut o.moves, &mut cur, m, m.p)
                 }
+                // A synchronised pass (G33, each G76 pass): rs274's STRAIGHT_FEEDs end at its
+                // knots (the drive and infeed axes), the other axes at the pass' end.
+                Step::Thread(p) => {
+                    for &(a, c) in &p.knots[1..p.n] {
+                        let mut t = p.target;
+                        t[p.along] = a.round() as i64;
+                        t[p.across] = c.round() as i64;
+                        let m = mv('F', t);
+                        push(&mut o.moves, &mut cur, m, m.p)
+                    }
+                }
                 Step::Follow(f) => {
                     let mut p = cur;
                     p[f.axis] = nm(f.target);
