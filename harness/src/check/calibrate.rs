@@ -11,7 +11,7 @@
 //! - `nc.spindle_ramp_ms`: the spindle's first start from rest (outside rigid strokes), its
 //!   slope from 10 % to 90 % of the speed it reaches, scaled to `nc.spindle_max_rpm`;
 //! - `plc.fin_ms`, `plc.fin_fall_ms`: the median of strobe ↑ → FIN ↑ and strobe ↓ → FIN ↓;
-//!   `plc.sppos_reach_ms` (SPPOS ↑ → SPPOSA ↑), `plc.rgtap_ms` (SPPOSA ↑ → RGTAP ↑),
+//!   `plc.sppos_reach_ms` (SPPOS ↑ → SPPOSA ↑, only where the spindle was at rest at SPPOS), `plc.rgtap_ms` (SPPOSA ↑ → RGTAP ↑),
 //!   `plc.rgtap_fall_ms` (F76.3 ↓ → RGTAP ↓).
 //!
 //! Only parameters of the dialect's table, within their ranges, are written.
@@ -260,9 +260,19 @@ pub fn estimate(machine: &Machine, axes: &[AxisSpec], recorded: &[TraceEvent]) -
             _ => None,
         })
         .collect();
+    // The spindle turning at `t` (the last sample at or before it): the drive reports position
+    // mode only once the spindle has come down at its ramp (seed 000's timing chart; issue 12),
+    // so an SPPOS raised with the spindle still turning measures the ramp, not the drive.
+    let turning_at = |t: i64| {
+        let k = samples.partition_point(|(ts, _)| *ts <= t);
+        k > 0 && samples[k - 1].1.spindle_mrpm.abs() > 500
+    };
     let delays = |from: &[(Signal, bool)], to: (Signal, bool)| -> Vec<i64> {
         let mut d = Vec::new();
         for (k, &(t, s, v)) in edges.iter().enumerate() {
+            if s == Signal::Sppos && turning_at(t) {
+                continue;
+            }
             if from.contains(&(s, v)) {
                 if let Some(&(tt, _, _)) = edges[k + 1..].iter().find(|e| (e.1, e.2) == to) {
                     d.push(tt - t);

@@ -95,6 +95,10 @@ pub struct KeyTracker {
     last_was: (bool, bool),
     return_pending: bool,
     last_reversal: Option<i64>,
+    /// F76.3 fell while a cut was still going deeper (a reset stops the tap at its own limits,
+    /// issue 12): the cut's depth and the return level are read where the tap stops going deeper,
+    /// so that a fall recorded a PLC scan late reads the same point.
+    settling: bool,
 }
 
 impl KeyTracker {
@@ -110,6 +114,7 @@ impl KeyTracker {
             last_was: (false, false),
             return_pending: false,
             last_reversal: None,
+            settling: false,
         }
     }
 
@@ -127,6 +132,7 @@ impl KeyTracker {
         match ev {
             Event::Sample(s) => {
                 let d = s.axes[tap.slot] * tap.into_sign;
+                let prev = self.last_depth;
                 let step = self.last_depth.map_or(0, |p| ((d - p).abs() + 1) / 2);
                 self.last_depth = Some(d);
                 if std::mem::take(&mut self.return_pending) {
@@ -154,6 +160,14 @@ impl KeyTracker {
                         self.last_was.1 = true;
                     }
                 }
+                if self.settling && prev.is_some_and(|p| d <= p) {
+                    self.settling = false;
+                    let deepest = self.cur.and_then(|c| c.deepest);
+                    self.close();
+                    if let (Some(r), Some(x)) = (self.keys.returns.last_mut(), deepest) {
+                        r.1 = Some(x);
+                    }
+                }
                 if self.sig.get(Signal::Rtap) {
                     let sign = s.spindle_mrpm.signum();
                     if sign != 0 {
@@ -170,6 +184,7 @@ impl KeyTracker {
                 self.sig.set(*signal, *value);
                 match (signal, value) {
                     (Signal::Rgspp | Signal::Rgspm, true) if !was => {
+                        self.settling = false;
                         self.close();
                         let d = self.last_depth;
                         self.cur = Some(Segment {
@@ -192,7 +207,13 @@ impl KeyTracker {
                         if self.last_reversal.take().is_some_and(|r| t - r < SETTLE_US) {
                             self.keys.reversals -= 1;
                         }
-                        self.close();
+                        // A cut still going deeper is read on until the tap stops going deeper.
+                        let going_deeper = self.cur.is_some_and(|c| c.into && c.t_stop.is_none());
+                        if going_deeper {
+                            self.settling = true;
+                        } else {
+                            self.close();
+                        }
                         if self.keys.returns.len() < MAX_SEGMENTS {
                             self.keys.returns.push((t, self.last_depth, 0));
                             self.return_pending = true;

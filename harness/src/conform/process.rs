@@ -25,6 +25,10 @@ use serde_json::{json, Map, Value};
 use super::{wire, Advanced, Controller, ControllerError, ErrorKind, Identity, Job, Loaded, PROTOCOL};
 use crate::import::{self, Format};
 
+/// How long a failed controller's stderr is read on after it was stopped (a grandchild holding the
+/// pipe open must not hold the run).
+const STDERR_DRAIN: Duration = Duration::from_millis(500);
+
 /// How much of the controller's stderr is kept (bytes).
 const STDERR_KEEP: usize = 4096;
 /// The longest answer line shown in an error (characters).
@@ -43,6 +47,8 @@ struct Proc {
     child: Child,
     stdin: ChildStdin,
     lines: Receiver<std::io::Result<String>>,
+    /// Closed when the stderr reader has read the pipe to its end.
+    stderr_done: Receiver<()>,
 }
 
 /// A controller behind an adapter program.
@@ -209,15 +215,17 @@ impl ProcessController {
     }
 
     fn fail(&mut self, kind: ErrorKind, message: impl Into<String>) -> ControllerError {
-        // Give the stderr reader a moment to collect what a dying process wrote.
-        if matches!(kind, ErrorKind::Crash | ErrorKind::Garbage | ErrorKind::Protocol) {
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        let e = ControllerError { kind, message: message.into(), stderr_tail: self.stderr_tail() };
         // Every controller error restarts the adapter, `ok: false` included
-        // (docs/adapter-protocol.md): the next scenario starts from a fresh handshake.
+        // (docs/adapter-protocol.md): the next scenario starts from a fresh handshake. The process
+        // is stopped first and its stderr read to the end (at most STDERR_DRAIN), so the tail holds
+        // what it wrote before it answered (an `ok: false` read at once used to race the reader).
+        if let Some(mut p) = self.proc.take() {
+            let _ = p.child.kill();
+            let _ = p.child.wait();
+            let _ = p.stderr_done.recv_timeout(STDERR_DRAIN);
+        }
         self.stop();
-        e
+        ControllerError { kind, message: message.into(), stderr_tail: self.stderr_tail() }
     }
 
     /// Kills the process (it is started again at the next request).
@@ -252,7 +260,10 @@ impl ProcessController {
         let (tx, rx) = mpsc::channel();
         std::thread::spawn(move || read_answers(stdout, &tx));
         let keep = Arc::clone(&self.stderr);
+        let (done_tx, stderr_done) = mpsc::channel::<()>();
         std::thread::spawn(move || {
+            // Dropped when the pipe has been read to its end: `fail` waits for it.
+            let _done = done_tx;
             let mut buf = [0u8; 1024];
             while let Ok(n) = stderr.read(&mut buf) {
                 if n == 0 {
@@ -266,7 +277,7 @@ impl ProcessController {
                 }
             }
         });
-        self.proc = Some(Proc { child, stdin, lines: rx });
+        self.proc = Some(Proc { child, stdin, lines: rx, stderr_done });
         self.hello()
     }
 
