@@ -139,8 +139,10 @@ impl Exec<'_> {
     /// for cycle start and carries on with the rest of the move.
     fn feed_hold_now(&mut self) {
         let period = self.cfg.period_us;
+        let coordinated_rapid = matches!(self.motion_step, Some(crate::plan::Step::Rapid { .. }));
         let a = match self.motion.as_ref().map(|m| &m.path) {
-            Some(Path::Rapid { .. }) => (0..crate::trace::AXES)
+            Some(Path::Rapid { .. }) | Some(Path::Line { .. }) if coordinated_rapid => (0
+                ..crate::trace::AXES)
                 .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
                 .fold(f64::INFINITY, f64::min),
             Some(Path::Tap { lead, .. }) => {

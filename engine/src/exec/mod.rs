@@ -132,6 +132,9 @@ pub(crate) struct Exec<'a> {
     /// A braking coast cut short at the allowance (NC-1050): when it ends (µs), the spindle's
     /// speed then (signed rpm) and its braking deceleration (rpm/µs).
     coast: Option<(Micros, f64, f64)>,
+    /// A spindle start has been commanded since the last cutting move: the next one waits for the
+    /// spindle at speed (`PlantConfig::feed_waits_at_speed`).
+    atspeed_next_feed: bool,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -209,6 +212,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         css: None,
         following: false,
         coast: None,
+        atspeed_next_feed: false,
     };
     ex.main_loop();
 }
