@@ -40,6 +40,8 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         orient_us: ms("nc.orient_ms"),
         excess_error_nm: 1_000_000,
         tool_change_us: 0,
+        coordinated_rapid: false,
+        feed_waits_at_speed: false,
         plc: PlcConfig {
             fin_us: ms("plc.fin_ms"),
             fin_fall_us: ms("plc.fin_fall_ms"),

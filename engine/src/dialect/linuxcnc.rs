@@ -71,7 +71,12 @@ impl Dialect for Linuxcnc {
         PARAMS
     }
     fn plant_config(&self, p: &Params) -> PlantConfig {
-        super::common::plant_config(p, "nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm")
+        // LinuxCNC's motion controller: G0 is one coordinated line (LCNC-MOD-02) and a cutting
+        // move after M3/M4 waits for the spindle at speed (LCNC-MOT-01).
+        let mut c = super::common::plant_config(p, "nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm");
+        c.coordinated_rapid = true;
+        c.feed_waits_at_speed = true;
+        c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {
         Box::new(interp::LcncInterp::new(params))

@@ -65,6 +65,14 @@ pub struct PlantConfig {
     pub tool_change_us: Micros,
     /// Servo excess error limit for the tap axis while moving, nm (alarm 0411).
     pub excess_error_nm: Nm,
+    /// G0 is one coordinated straight line: every axis starts and ends together, the path's
+    /// speed and acceleration limited by the slowest axis for its share of the path (LinuxCNC's
+    /// trajectory planner). False: each axis rapids at its own rate and ends on its own.
+    pub coordinated_rapid: bool,
+    /// A spindle start (M3/M4) makes the next cutting move (line or arc, not a rapid) wait until
+    /// the spindle has reached its commanded speed (LinuxCNC's motion controller:
+    /// `atspeed_next_feed`, `spindle.0.at-speed`).
+    pub feed_waits_at_speed: bool,
     /// The PLC ladder.
     pub plc: PlcConfig,
     /// The override switches' ranges and steps.

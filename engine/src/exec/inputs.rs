@@ -190,6 +190,19 @@ impl Exec<'_> {
                 (a_rpm * lead / 60e6)
                     .min(self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64)
             }
+            // A coordinated rapid (LinuxCNC's G0, one straight line, LCNC-MOT-01): the lowest
+            // rapid acceleration of the axes that have one.
+            Some(Path::Line { .. }) if matches!(self.motion_step, Some(crate::plan::Step::Rapid { .. })) => {
+                let a = (0..crate::trace::AXES)
+                    .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
+                    .filter(|a| *a > 0.0)
+                    .fold(f64::INFINITY, f64::min);
+                if a.is_finite() {
+                    a
+                } else {
+                    self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64
+                }
+            }
             Some(_) => self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64,
             None => 0.0,
         }

@@ -136,6 +136,9 @@ pub(crate) struct Exec<'a> {
     /// The speed (nm/µs) a following cut reached its end point with, and whether it ran under
     /// machine lock, for the brake after it.
     follow_v: Option<(f64, bool)>,
+    /// A spindle start has been commanded since the last cutting move: the next one waits for the
+    /// spindle at speed (`PlantConfig::feed_waits_at_speed`).
+    atspeed_next_feed: bool,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -217,6 +220,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         following: false,
         coast: None,
         follow_v: None,
+        atspeed_next_feed: false,
     };
     ex.main_loop();
 }

@@ -120,6 +120,32 @@ impl Law {
     }
 }
 
+/// A rapid as one coordinated straight line over `delta` (nm per axis): the path's speed and
+/// acceleration are the largest that keep every axis within its own rapid rate (nm/min) and
+/// acceleration (rate over its time constant, µs) for its share of the path, so the slowest axis
+/// for its share sets them and every axis starts and ends together (LinuxCNC's G0).
+pub fn coordinated_rapid(
+    delta: [f64; AXES],
+    rate_nm_min: [f64; AXES],
+    ramp_us: [Micros; AXES],
+    period: Micros,
+) -> Path {
+    let len = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
+    let (mut v, mut a) = (f64::INFINITY, f64::INFINITY);
+    for i in 0..AXES {
+        if delta[i] != 0.0 {
+            let share = len / delta[i].abs();
+            let vi = rate_nm_min[i] / 60e6;
+            v = v.min(vi * share);
+            a = a.min(vi / ramp_us[i].max(1) as f64 * share);
+        }
+    }
+    if !v.is_finite() {
+        return Path::Line { profile: Profile::still(), len: 0.0 };
+    }
+    Path::Line { profile: Profile::trapezoid(len, v, a, period), len }
+}
+
 /// One motion in progress.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Motion {

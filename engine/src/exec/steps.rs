@@ -88,6 +88,16 @@ impl Exec<'_> {
             self.active = Active::Until(next);
             return;
         }
+        // LinuxCNC: the first cutting move after a spindle start waits for the spindle at speed.
+        if self.atspeed_next_feed && matches!(step, Step::Feed { .. } | Step::Arc { .. }) {
+            self.atspeed_next_feed = false;
+            if self.spindle.ramp(now).is_some() && !self.spindle.stalled {
+                let ready = ceil_to(self.spindle.ramp_end().max(now + 1), self.cfg.period_us);
+                self.steps.push_front(step);
+                self.active = Active::Until(ready);
+                return;
+            }
+        }
         match step {
             Step::Phase(p) => self.set_phase(p),
             Step::Rapid { target } => {
@@ -268,6 +278,24 @@ impl Exec<'_> {
     }
 
     fn start_rapid(&mut self, target: Pos) {
+        if self.cfg.coordinated_rapid {
+            // One straight line (LinuxCNC); backlash is the joints' business, not the path's.
+            for i in 0..AXES {
+                let d = target[i] - self.cmd[i];
+                if d != 0 {
+                    self.backlash(i, d.signum() as i8);
+                }
+            }
+            let delta = std::array::from_fn(|i| (target[i] - self.cmd[i]) as f64);
+            let path = super::motion::coordinated_rapid(
+                delta,
+                self.cfg.rapid_nm_min,
+                self.cfg.rapid_ramp_us,
+                self.cfg.period_us,
+            );
+            self.start_motion(target, path);
+            return;
+        }
         let mut profiles = [Profile::still(); AXES];
         let mut backlash = [0.0; AXES];
         for i in 0..AXES {
@@ -480,8 +508,14 @@ impl Exec<'_> {
         let mut orient_fin = 0;
         match effect {
             SpindleEffect::None => {}
-            SpindleEffect::Forward => self.spindle.command(now, speed),
-            SpindleEffect::Reverse => self.spindle.command(now, -speed),
+            SpindleEffect::Forward => {
+                self.spindle.command(now, speed);
+                self.atspeed_next_feed = self.cfg.feed_waits_at_speed;
+            }
+            SpindleEffect::Reverse => {
+                self.spindle.command(now, -speed);
+                self.atspeed_next_feed = self.cfg.feed_waits_at_speed;
+            }
             SpindleEffect::Stop => self.spindle.command(now, 0.0),
             SpindleEffect::Orient => {
                 // FIN comes when the orientation is complete (FAN-LEX-06).
