@@ -115,6 +115,19 @@ pub fn display_name(path: &Path) -> String {
 /// The file cannot be opened or read, or it is larger than the cap.
 pub fn read_capped(path: &Path, cap: Cap) -> Result<Vec<u8>, String> {
     let limit = cap.bytes();
+    // A named pipe with no writer blocks `open` for ever (a scenario's `program_file` naming one
+    // hung the run): refused, except the standard streams a user names on purpose (/dev/stdin).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let device = path.starts_with("/dev") || path.starts_with("/proc");
+        if !device && std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo()) {
+            return Err(
+                "cannot read: it is a named pipe (FIFO), which may never end; give a file, or /dev/stdin"
+                    .into(),
+            );
+        }
+    }
     let f = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
     let meta = f.metadata().map_err(|e| format!("cannot read: {e}"))?;
     if meta.is_dir() {

@@ -710,3 +710,19 @@ fn check_keeps_a_bounded_number_of_recorded_events() {
         "edges.jsonl: more than 1000000 recorded events other than samples",
     );
 }
+
+/// A scenario whose `program_file` names a named pipe with no writer: refused at once, where it
+/// used to wait for ever in `open`.
+#[cfg(unix)]
+#[test]
+fn a_program_file_that_is_a_named_pipe_is_refused() {
+    let d = Dir::new("fifo_program");
+    let made = Command::new("mkfifo").arg(d.0.join("prog.nc")).status().is_ok_and(|s| s.success());
+    if !made {
+        eprintln!("skipped: mkfifo is not available here");
+        return;
+    }
+    d.file("s.yaml", "title: a pipe\nrules: [COM-PARSE-05]\ndialect: gsk-lathe\nprogram_file: prog.nc\n");
+    hostile(&d.0, &["run", "s.yaml"], 2, "named pipe");
+    hostile(&d.0, &["run", "prog.nc", "--dialect", "gsk-lathe"], 2, "named pipe");
+}
