@@ -26,6 +26,7 @@ pub mod determinism;
 pub mod diag;
 pub mod fuzz;
 pub mod import;
+pub mod ini;
 pub mod input;
 pub mod json_keys;
 pub mod jsonl;

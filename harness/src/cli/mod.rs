@@ -23,6 +23,7 @@ pub mod campaign;
 pub mod check;
 pub mod conform;
 pub mod fuzz_files;
+pub mod params;
 pub mod progress;
 pub mod run;
 pub mod run_scenario;
@@ -77,6 +78,11 @@ pub enum Command {
     /// Estimate a machine's timing (axis rates and time constants, spindle ramp, PLC answer
     /// delays) from a recording of a known-good run; write a parameter file (docs/checking.md).
     Calibrate(check::CalibrateArgs),
+    /// Write the linuxcnc dialect's parameters from a LinuxCNC machine's INI file
+    /// (`--from-ini MACHINE.ini`), naming what could not be mapped.
+    ///
+    /// Exits 0 when the file was written, 2 for errors in the input.
+    Params(params::ParamsArgs),
     /// Serve the reference engine over the adapter protocol on stdin/stdout (for adapters that
     /// delegate to it, and for tests).
     #[command(hide = true)]
@@ -92,6 +98,7 @@ pub fn main() -> ExitCode {
         Command::Check(args) => ExitCode::from(check::run(&args)),
         Command::Conform(args) => ExitCode::from(conform::run(&args)),
         Command::Calibrate(args) => ExitCode::from(check::calibrate(&args)),
+        Command::Params(args) => ExitCode::from(params::run(&args)),
         Command::Serve => ExitCode::from(conform::serve()),
     }
 }

@@ -1,0 +1,104 @@
+//! `nc-conform params --from-ini` (issue 13): a LinuxCNC machine's INI file as linuxcnc
+//! parameters. The oracle is the parameter file written by hand for the recorded machine
+//! (`testdata/linuxcnc-real/linuxcnc-sim.params.yaml`, from the INI and HAL of the recordings) and
+//! LinuxCNC's own sample configurations where the package is installed.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_nc-conform");
+
+fn data() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../testdata/linuxcnc-real")
+}
+
+fn from_ini(ini: &Path) -> (i32, String, String) {
+    let out = Command::new(BIN).args(["params", "--from-ini"]).arg(ini).output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn machine_with(yaml: &str) -> nc_engine::Machine {
+    let mut m = nc_engine::Machine::new("linuxcnc").unwrap();
+    nc_conform::params_yaml::apply(yaml, &mut m).unwrap_or_else(|e| panic!("{e:?}\n{yaml}"));
+    m
+}
+
+#[test]
+fn the_recorded_machines_ini_gives_its_hand_written_parameters() {
+    let (code, yaml, err) = from_ini(&data().join("sim_tap.ini"));
+    assert_eq!(code, 0, "{err}");
+    let got = machine_with(&yaml);
+    let want = machine_with(&std::fs::read_to_string(data().join("linuxcnc-sim.params.yaml")).unwrap());
+    for (id, axis) in [
+        ("nc.period_us", None),
+        ("nc.rapid_mm_min", Some('X')),
+        ("nc.rapid_mm_min", Some('Y')),
+        ("nc.rapid_mm_min", Some('Z')),
+        ("nc.rapid_ramp_ms", Some('X')),
+        ("nc.rapid_ramp_ms", Some('Z')),
+        ("nc.feed_max_mm_min", None),
+        ("nc.feed_ramp_ms", None),
+    ] {
+        let (g, w) = (got.params.get_axis(id, axis), want.params.get_axis(id, axis));
+        assert!((g - w).abs() < 1e-6, "{id} {axis:?}: {g} from the INI, {w} by hand\n{yaml}");
+    }
+    // Each value says where it came from; the spindle ramp is named as not in the INI.
+    assert!(yaml.contains("[AXIS_X] MAX_VELOCITY = 30.48"), "{yaml}");
+    assert!(yaml.contains("# Not mapped:") && yaml.contains("nc.spindle_ramp_ms"), "{yaml}");
+    assert!(yaml.contains("nc.feed_override_max_pct: 120"), "{yaml}");
+}
+
+#[test]
+fn inch_machines_are_scaled_and_what_cannot_be_mapped_is_named() {
+    let dir = std::env::temp_dir().join(format!("ncc-ini-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let ini = dir.join("inch.ini");
+    std::fs::write(
+        &ini,
+        "[EMCMOT]\nSERVO_PERIOD = 1500000\n[TRAJ]\nCOORDINATES = X Z\nLINEAR_UNITS = inch\n\
+         MAX_LINEAR_VELOCITY = 1.0\n[AXIS_X]\nMAX_VELOCITY = 4\nMAX_ACCELERATION = 100\n\
+         [JOINT_0]\nMAX_VELOCITY = 2\nMAX_ACCELERATION = 100\n[AXIS_Z]\nMAX_VELOCITY = 4\n\
+         MAX_ACCELERATION = 50\n",
+    )
+    .unwrap();
+    let (code, yaml, err) = from_ini(&ini);
+    assert_eq!(code, 0, "{err}");
+    let m = machine_with(&yaml);
+    // X: the joint's 2 in/s is the smaller; 2 × 25.4 × 60 mm/min, ramp 2/100 s.
+    assert!((m.params.get_axis("nc.rapid_mm_min", Some('X')) - 3048.0).abs() < 1e-6, "{yaml}");
+    assert!((m.params.get_axis("nc.rapid_ramp_ms", Some('X')) - 20.0).abs() < 1e-6, "{yaml}");
+    assert!((m.params.get_axis("nc.rapid_ramp_ms", Some('Z')) - 80.0).abs() < 1e-6, "{yaml}");
+    // The feed is capped by [TRAJ] MAX_LINEAR_VELOCITY (1 in/s).
+    assert!((m.params.get("nc.feed_max_mm_min") - 1524.0).abs() < 1e-6, "{yaml}");
+    assert!(yaml.contains("SERVO_PERIOD = 1500000 ns") && yaml.contains("1, 2, 4 or 8 ms"), "{yaml}");
+
+    std::fs::write(&ini, "[TRAJ]\nLINEAR_UNITS = mm\nthis is not a key\n").unwrap();
+    let (code, _, err) = from_ini(&ini);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("inch.ini:3") && err.contains("expected KEY = value"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// LinuxCNC's own sample configurations, where the package is installed (`linuxcnc-uspace`):
+/// mm and inch machines give the rates their INI files state.
+#[test]
+fn linuxcncs_sample_configurations_map() {
+    let dir = Path::new("/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis");
+    if !dir.join("axis_mm.ini").is_file() {
+        eprintln!(
+            "skipped: LinuxCNC's sample configurations are not installed (apt-get install linuxcnc-uspace)"
+        );
+        return;
+    }
+    for (file, x_mm_min) in [("axis_mm.ini", 30.48 * 60.0), ("axis.ini", 4.0 * 25.4 * 60.0)] {
+        let (code, yaml, err) = from_ini(&dir.join(file));
+        assert_eq!(code, 0, "{file}: {err}");
+        let m = machine_with(&yaml);
+        let x = m.params.get_axis("nc.rapid_mm_min", Some('X'));
+        assert!((x - x_mm_min).abs() < 1e-3, "{file}: X {x} mm/min\n{yaml}");
+    }
+}
