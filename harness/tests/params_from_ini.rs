@@ -1,6 +1,6 @@
 //! `nc-conform params --from-ini` (issue 13): a LinuxCNC machine's INI file as linuxcnc
 //! parameters. The oracle is the parameter file written by hand for the recorded machine
-//! (`testdata/linuxcnc-real/linuxcnc-sim.params.yaml`, from the INI and HAL of the recordings) and
+//! (`testdata/linuxcnc/linuxcnc-sim.params.yaml`, from the INI and HAL of the recordings) and
 //! LinuxCNC's own sample configurations where the package is installed.
 
 use std::path::{Path, PathBuf};
@@ -9,7 +9,7 @@ use std::process::Command;
 const BIN: &str = env!("CARGO_BIN_EXE_nc-conform");
 
 fn data() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../testdata/linuxcnc-real")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../testdata/linuxcnc")
 }
 
 fn from_ini(ini: &Path) -> (i32, String, String) {
