@@ -42,9 +42,14 @@ import json, subprocess, sys, os, time
 mode, marker, nc = sys.argv[1], sys.argv[2], sys.argv[3]
 serve = subprocess.Popen([nc, "serve"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
 first = not os.path.exists(marker)
+loads = 0
 for line in sys.stdin:
     req = json.loads(line)
     op = req["op"]
+    loads += op == "load"
+    if op == "input" and mode == "na" and loads == 1:
+        print(json.dumps({"ok": False, "unsupported": "not applicable: no feed hold switch"}), flush=True)
+        continue
     if op == "hello" and mode == "old":
         print(json.dumps({"ok": True, "protocol": "nc-conform-adapter/0", "name": "old", "version": "0", "dialects": []}), flush=True)
         continue
@@ -119,6 +124,26 @@ fn first_fails_and_the_suite_goes_on(mode: &str, extra: &[&str], says: &[&str]) 
         assert!(t.contains(s), "`{s}` missing from: {t}");
     }
     assert!(t.contains("ok   scenarios/gsk/feed_hold/during_dwell.yaml"), "restarted for the next: {t}");
+}
+
+/// An input the controller cannot honour (`unsupported` to `input`, docs/adapter-protocol.md):
+/// the scenario is not applicable (skipped, never passed nor failed) and the same adapter process
+/// goes on with the next scenario (it would refuse that one's inputs too if it were restarted).
+#[test]
+fn an_input_the_controller_cannot_honour_makes_the_scenario_not_applicable() {
+    let dir = scratch("na");
+    let junit = dir.join("junit.xml");
+    let mut args = TWO.to_vec();
+    args.extend(["--junit", junit.to_str().unwrap()]);
+    let o = conform(&broken_adapter(&dir, "na"), &args);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("skip scenarios/gsk/feed_hold/during_cutting.yaml"), "{t}");
+    assert!(t.contains("not applicable: no feed hold switch"), "{t}");
+    assert!(t.contains("ok   scenarios/gsk/feed_hold/during_dwell.yaml"), "not restarted: {t}");
+    assert!(t.contains("1 passed, 0 failed, 1 skipped"), "{t}");
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    assert!(xml.contains("<skipped message=\"not applicable: no feed hold switch\"/>"), "{xml}");
 }
 
 #[test]

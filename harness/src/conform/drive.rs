@@ -89,13 +89,28 @@ struct Waiting {
     seen: u32,
 }
 
-/// Runs the job on `ctl` with the scenario's inputs; the trace gets `meta`.
+/// Runs the job on `ctl` with the scenario's inputs; the trace gets `meta`. A controller that
+/// answers an input or an advance with `unsupported` ([`ErrorKind::NotApplicable`]) does not run
+/// the scenario: [`Driven::Unsupported`].
 ///
 /// # Errors
 ///
 /// The controller failed, or broke the protocol (a stop on a condition it was not given, events
 /// out of order, no `end` event).
 pub fn drive(
+    ctl: &mut dyn Controller,
+    s: &Scenario,
+    job: &Job,
+    meta: TraceMeta,
+) -> Result<Driven, ControllerError> {
+    match steps(ctl, s, job, meta) {
+        // An input or condition the controller cannot honour: not applicable, never passed.
+        Err(e) if e.kind == ErrorKind::NotApplicable => Ok(Driven::Unsupported(e.message)),
+        other => other,
+    }
+}
+
+fn steps(
     ctl: &mut dyn Controller,
     s: &Scenario,
     job: &Job,

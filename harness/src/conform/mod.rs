@@ -124,6 +124,9 @@ pub enum ErrorKind {
     Protocol,
     /// The controller answered `ok: false` with an error.
     Failed,
+    /// The controller cannot honour an input or condition of this scenario (`ok: false` with
+    /// `unsupported` to `input` or `advance`): the scenario is not applicable, reported as skipped.
+    NotApplicable,
 }
 
 impl ErrorKind {
@@ -135,6 +138,7 @@ impl ErrorKind {
             ErrorKind::Garbage => "garbage output",
             ErrorKind::Protocol => "protocol error",
             ErrorKind::Failed => "controller error",
+            ErrorKind::NotApplicable => "not applicable",
         }
     }
 }

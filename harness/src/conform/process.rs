@@ -378,6 +378,13 @@ impl ProcessController {
         let op = msg.get("op").and_then(Value::as_str).unwrap_or("?");
         match o.get("ok") {
             Some(Value::Bool(true)) => Ok(o),
+            Some(Value::Bool(false))
+                if op != "load" && o.get("unsupported").is_some_and(Value::is_string) =>
+            {
+                // The scenario is not applicable: the adapter goes on (no restart).
+                let why = o.get("unsupported").and_then(Value::as_str).unwrap_or_default();
+                Err(ControllerError::new(ErrorKind::NotApplicable, crate::diag::printable(why, 2 * SHOW)))
+            }
             Some(Value::Bool(false)) => {
                 let why = o.get("error").and_then(Value::as_str).unwrap_or("(no `error` given)");
                 let why = crate::diag::printable(why, 2 * SHOW);

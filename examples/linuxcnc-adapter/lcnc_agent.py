@@ -1,0 +1,489 @@
+#!/usr/bin/python3
+"""The adapter's agent inside LinuxCNC: the machine configuration's DISPLAY program (LinuxCNC
+starts it once the HAL, task and motion are up, and shuts down when it exits).
+
+It connects to the adapter's Unix socket ($LCNC_AGENT_SOCK), turns the machine on, homes it, and
+then serves one request per line:
+
+- `{"op":"run", ...}`: one program run with its operator inputs at their times (see `run`): the
+  HAL sampler records every servo cycle into a file, the agent logs what LinuxCNC's task said
+  (interpreter state, pause, errors) and when each input was given, in servo cycles of the
+  machine's clock (`servo_clock`, an `integ` of 1 in the servo thread);
+- `{"op":"quit"}`: exit (LinuxCNC shuts down).
+
+Runs under LinuxCNC's own Python (the `linuxcnc` and `hal` modules). Standard library otherwise.
+"""
+
+import json
+import os
+import select
+import socket
+import subprocess
+import sys
+import time
+
+import hal
+import linuxcnc
+
+c = linuxcnc.command()
+s = linuxcnc.stat()
+e = linuxcnc.error_channel()
+
+
+def log(*a):
+    print("lcnc-agent:", *a, file=sys.stderr, flush=True)
+
+
+class Clock:
+    """The servo cycle count, read from the HAL (the same value the sampler records)."""
+
+    def __init__(self, period_s):
+        self.period_s = period_s
+
+    def now(self):
+        return int(round(hal.get_value("servo_clock.out") / self.period_s))
+
+
+def errors(sink, clock):
+    """LinuxCNC's operator messages since the last call, stamped."""
+    while True:
+        m = e.poll()
+        if not m:
+            return
+        kind, text = m
+        sink.append({"cycle": clock.now(), "kind": int(kind), "text": str(text)})
+
+
+def wait(cond, timeout, what, sink=None, clock=None):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        s.poll()
+        if cond():
+            return
+        if sink is not None:
+            errors(sink, clock)
+        time.sleep(0.005)
+    raise RuntimeError("timeout waiting for " + what)
+
+
+def machine_on(msgs, clock):
+    """E-stop reset and machine on, repeated until the state shows it (2.9's separate IO
+    program may take the first commands before it is ready), then home in place."""
+    for _ in range(50):
+        s.poll()
+        if s.task_state == linuxcnc.STATE_ON:
+            break
+        c.state(linuxcnc.STATE_ESTOP_RESET if s.task_state == linuxcnc.STATE_ESTOP else linuxcnc.STATE_ON)
+        c.wait_complete(1.0)
+        time.sleep(0.1)
+        errors(msgs, clock)
+    else:
+        raise RuntimeError("the machine does not turn on")
+    s.poll()
+    if not all(s.homed[i] for i in range(3)):
+        c.mode(linuxcnc.MODE_MANUAL)
+        c.wait_complete()
+        c.teleop_enable(0)
+        c.wait_complete()
+        c.home(-1)
+        wait(lambda: all(s.homed[i] for i in range(3)), 30, "homing")
+
+
+# Blocks that bring the machine back to the dialect's power-on state between runs (modal codes
+# as the reference's power-on, offsets cleared, spindle and coolant off, at machine zero).
+POWER_ON_MDI = [
+    "G92.1",
+    "G10 L2 P1 X0 Y0 Z0",
+    "G17 G21 G40 G49 G54 G80 G90 G94 G99 G8 G64 M5 M9",
+    "F0 S0",
+    "G53 G0 X0 Y0 Z0",
+]
+
+
+def prepare(msgs, clock):
+    """Power-on state: aborted, machine on and homed, power-on modes, overrides 100 %, at machine
+    zero, spindle stopped with its angle at 0 (the sim spindle's position reset)."""
+    c.abort()
+    c.wait_complete(2.0)
+    hal.set_p("stall.sel", "0")
+    machine_on(msgs, clock)
+    c.mode(linuxcnc.MODE_MDI)
+    c.wait_complete()
+    c.reset_interpreter()
+    c.wait_complete()
+    for line in POWER_ON_MDI:
+        c.mdi(line)
+        c.wait_complete(5.0)
+        wait(lambda: s.interp_state == linuxcnc.INTERP_IDLE, 30, "MDI " + line, msgs, clock)
+    c.feedrate(1.0)
+    c.spindleoverride(1.0, 0)
+    c.set_optional_stop(0)
+    c.set_block_delete(0)
+    wait(lambda: s.inpos and abs(hal.get_value("spindle-speed-limited")) < 1e-9, 30, "machine at rest")
+    zero_spindle()
+    errors(msgs, clock)
+
+
+def zero_spindle():
+    """Turns the stopped sim spindle to the nearest whole revolution (its index, the reference's
+    angle 0 at power-on), within 1e-5 revolution: a HAL signal with a writer cannot be set, so the
+    spindle is driven through the stall switch's other input at a speed that covers 90 % of the
+    way in about 0.1 s, a few times over."""
+    for _ in range(12):
+        pos = hal.get_value("spindle-pos")
+        d = round(pos) - pos
+        if abs(d) < 1e-5:
+            break
+        # rpm for 0.9 * d revolutions in 0.1 s (velocity-cmd is in rpm, scale 1/60)
+        hal.set_p("stall.in1", str(0.9 * d / 0.1 * 60.0))
+        hal.set_p("stall.sel", "1")
+        time.sleep(0.1)
+        hal.set_p("stall.sel", "0")
+        hal.set_p("stall.in1", "0")
+        time.sleep(0.005)
+    hal.set_p("stall.in1", "0")
+    hal.set_p("stall.sel", "0")
+
+
+SOCK = None
+_last_check = [0.0]
+
+
+def adapter_gone():
+    """The adapter closed its end (it was stopped): LinuxCNC must not be left running."""
+    now = time.monotonic()
+    if SOCK is None or now - _last_check[0] < 0.1:
+        return False
+    _last_check[0] = now
+    r, _, _ = select.select([SOCK], [], [], 0)
+    if not r:
+        return False
+    try:
+        return SOCK.recv(1, socket.MSG_PEEK) == b""
+    except OSError:
+        return True
+
+
+def held():
+    """The program stands held (the SPL lamp): paused by feed hold or M0/M1 (the interpreter
+    paused, as halui's program.is-paused), or a single-block step done (task paused with nothing
+    left in motion's queue)."""
+    if s.interp_state == linuxcnc.INTERP_PAUSED:
+        return True
+    return bool(s.task_paused) and s.queue == 0 and bool(s.inpos)
+
+
+def clamp(x, lo, hi):
+    return max(lo, min(hi, x))
+
+
+class Commanders:
+    """LinuxCNC's Python interface waits for the task to take each command (it polls every 10 ms,
+    ~20 ms in all), so commands are sent from child processes, in turn, while the agent keeps
+    watching the servo clock and the task's status."""
+
+    def __init__(self, n=3):
+        self.pipes = []
+        for _ in range(n):
+            r, w = os.pipe()
+            if os.fork() == 0:
+                os.close(w)
+                cc = linuxcnc.command()
+                with os.fdopen(r) as f:
+                    for line in f:
+                        op = json.loads(line)
+                        getattr(cc, op[0])(*op[1:])
+                os._exit(0)
+            os.close(r)
+            self.pipes.append(os.fdopen(w, "w"))
+        self.k = 0
+
+    def send(self, cmd):
+        f = self.pipes[self.k]
+        self.k = (self.k + 1) % len(self.pipes)
+        f.write(json.dumps(list(cmd)) + "\n")
+        f.flush()
+
+
+COMMANDERS = None
+
+
+class Run:
+    """One program run. Request keys: `program` (path), `out` (recording path), `inputs`
+    ([{"t_us", "input", "lead_us"}], by time), `time_limit_us`, `auto_cycle_start`, `t0_lead`
+    (servo cycles from the run command to the program's first output, as seen in an earlier run;
+    used until this run shows its own), `cfg` (period_us, override limits), `hold_ms` (a program
+    held with no input left to release it is stopped after this long)."""
+
+    def __init__(self, req, clock):
+        self.req = req
+        self.clock = clock
+        self.cfg = req["cfg"]
+        self.period_us = self.cfg["period_us"]
+        self.msgs = []
+        self.states = []
+        self.given = []
+        self.single_block = False
+        self.step_taken = None
+        self.commanders = COMMANDERS
+
+    def snapshot(self):
+        """The outputs whose first change marks the program's start (t = 0)."""
+        g = hal.get_value
+        return (
+            round(g("Xpos"), 9), round(g("Ypos"), 9), round(g("Zpos"), 9), g("spindle.0.on"),
+            g("spindle.0.speed-out"), g("motion.program-line"), g("motion.motion-type"),
+            g("iocontrol.0.coolant-flood"), g("iocontrol.0.coolant-mist"),
+        )
+
+    def give(self, inp, cycle_due, direct=False):
+        """Applies one input through LinuxCNC's Python interface (as a GUI's buttons do) and
+        records when LinuxCNC's task took it (its status echoes the command's serial number);
+        returns None, or why it cannot be given. `direct`: before the start, sent and waited for
+        here."""
+        name = inp["name"]
+        before = self.clock.now()
+        s.poll()
+        cmd = None
+        if name == "feed_hold":
+            cmd = ("auto", linuxcnc.AUTO_PAUSE)
+        elif name == "cycle_start":
+            if self.held() or s.task_paused:
+                cmd = ("auto", linuxcnc.AUTO_STEP if self.single_block else linuxcnc.AUTO_RESUME)
+        elif name == "reset":
+            cmd = ("abort",)
+        elif name == "single_block":
+            self.single_block = bool(inp["on"])
+            if self.single_block and s.interp_state != linuxcnc.INTERP_IDLE and not s.paused:
+                cmd = ("auto", linuxcnc.AUTO_STEP)
+        elif name == "optional_stop":
+            cmd = ("set_optional_stop", 1 if inp["on"] else 0)
+        elif name == "emergency_stop":
+            cmd = ("state", linuxcnc.STATE_ESTOP if inp["on"] else linuxcnc.STATE_ESTOP_RESET)
+        elif name == "feed_override":
+            cmd = ("feedrate", clamp(inp["percent"] / 100.0, 0.0, self.cfg["feed_override_max"]))
+        elif name == "spindle_override":
+            f = clamp(inp["percent"] / 100.0, self.cfg["spindle_override_min"], self.cfg["spindle_override_max"])
+            cmd = ("spindleoverride", f, 0)
+        elif name == "spindle_stall":
+            hal.set_p("stall.sel", "1" if inp["on"] else "0")
+        else:
+            return f"LinuxCNC has no counterpart of the `{name}` input"
+        g = {"cycle": before, "sent": before, "due": cycle_due, "input": inp}
+        if cmd is not None:
+            if direct:
+                getattr(c, cmd[0])(*cmd[1:])
+                g["cycle"] = self.clock.now()
+            else:
+                g["echo"] = s.echo_serial_number
+                g["estop"] = name == "emergency_stop" and inp["on"]
+                g["cycle"] = None
+                self.commanders.send(cmd)
+        self.given.append(g)
+        return None
+
+    def acks(self):
+        """Stamps the inputs LinuxCNC's task has now taken."""
+        for g in self.given:
+            if g["cycle"] is None:
+                took = s.task_state == linuxcnc.STATE_ESTOP if g["estop"] else s.echo_serial_number != g["echo"]
+                if took:
+                    g["cycle"] = self.clock.now()
+                    if g["input"]["name"] == "cycle_start" and self.single_block:
+                        self.step_taken = g["cycle"]
+
+    def state(self):
+        s.poll()
+        self.acks()
+        # "paused" as halui's program.is-paused: the interpreter is paused (feed hold, a
+        # single-block step done, M0/M1)
+        return (s.interp_state, self.held(), s.task_state, s.exec_state, bool(s.paused), bool(s.task_paused), s.queue)
+
+    def held(self):
+        """The program stands held (the SPL lamp): paused by feed hold or M0/M1 (the interpreter
+        paused, as halui's program.is-paused), or a single-block step done: after a step is
+        taken, once LinuxCNC's task is paused again with nothing left in motion's queue."""
+        now = self.clock.now()
+        if self.step_taken is not None:
+            if now >= self.step_taken + 2 and s.task_paused and s.queue == 0 and s.inpos:
+                self.step_taken = None
+                return True
+            return False
+        return held()
+
+    def run(self):
+        req, clock = self.req, self.clock
+        per_ms = 1000.0 / self.period_us
+        c.mode(linuxcnc.MODE_AUTO)
+        c.wait_complete()
+        c.program_open(req["program"])
+        c.wait_complete()
+        out = open(req["out"], "w")
+        sampler = subprocess.Popen(["halsampler", "-t"], stdout=out)
+        time.sleep(0.05)
+        pending = list(req["inputs"])
+        # Inputs at 0 that set a switch act before the start (the reference applies them before
+        # its first step); the others wait for the program's first output.
+        early = {"feed_override", "spindle_override", "single_block", "optional_stop", "spindle_stall"}
+        hal.set_p("sampler.0.enable", "1")
+        time.sleep(0.01)
+        before = self.snapshot()
+        c_run = clock.now()
+        for p in [p for p in pending if p["t_us"] == 0 and p["input"]["name"] in early]:
+            pending.remove(p)
+            why = self.give(p["input"], c_run, direct=True)
+            if why:
+                return self.finish(out, sampler, {"not_applicable": why})
+        if self.single_block:
+            c.auto(linuxcnc.AUTO_STEP)
+        else:
+            c.auto(linuxcnc.AUTO_RUN, 0)
+        wall0 = time.monotonic()
+        wall_limit = req["time_limit_us"] / 1e6 * 3 + 30
+        t0 = None
+        t0_guess = c_run + int(req.get("t0_lead", 2))
+        last = None
+        end = None
+        limit_cycles = int(req["time_limit_us"] // self.period_us)
+        started = False
+        held_since = None
+        reset_at = None
+        while end is None:
+            now = clock.now()
+            st = self.state()
+            if st != last:
+                self.states.append({"cycle": now, "interp": st[0], "paused": st[1], "task": st[2], "exec": st[3],
+                                    "motion_paused": st[4], "task_paused": st[5], "queue": st[6],
+                                    "line": s.current_line, "motion_line": s.motion_line})
+                last = st
+            errors(self.msgs, clock)
+            if t0 is None and self.snapshot() != before:
+                t0 = now
+            base = t0 if t0 is not None else t0_guess
+            while pending:
+                p = pending[0]
+                due = base + int(round(p["t_us"] / self.period_us))
+                lead = int(round(p.get("lead_us", 0) / self.period_us))
+                if now < due - lead:
+                    break
+                pending.pop(0)
+                why = self.give(p["input"], due)
+                if why:
+                    return self.finish(out, sampler, {"not_applicable": why})
+                if p["input"]["name"] == "reset":
+                    reset_at = now
+            running = st[0] != linuxcnc.INTERP_IDLE
+            started = started or running or t0 is not None
+            if reset_at is not None and now - reset_at > 20 * per_ms:
+                end = {"reason": "reset", "cycle": reset_at}
+            elif t0 is not None and now - t0 >= limit_cycles:
+                c.abort()
+                end = {"reason": "time_limit", "cycle": t0 + limit_cycles}
+            elif st[2] == linuxcnc.STATE_ESTOP:
+                end = {"reason": "alarm", "cycle": now, "estop": True}
+            elif started and not running:
+                end = self.settle({"reason": "program_end", "cycle": now})
+            elif st[1]:
+                if req.get("auto_cycle_start"):
+                    if not self.given or self.given[-1]["cycle"] is not None:
+                        self.give({"name": "cycle_start"}, now)
+                        self.given[-1]["auto"] = True
+                elif not pending:
+                    held_since = held_since if held_since is not None else now
+                    if now - held_since > req.get("hold_ms", 500) * per_ms:
+                        end = {"reason": "stopped", "cycle": now}
+                else:
+                    held_since = None
+            else:
+                held_since = None
+            if t0 is None and now - c_run >= limit_cycles:
+                end = {"reason": "time_limit", "cycle": now}
+            if adapter_gone():
+                c.abort()
+                raise SystemExit("the adapter is gone")
+            if time.monotonic() - wall0 > wall_limit:
+                end = {"reason": "time_limit", "cycle": now, "wall": True}
+            time.sleep(0.0003)
+        if end["reason"] in ("stopped", "time_limit", "alarm"):
+            c.abort()
+        return self.finish(out, sampler, {"end": end, "t0": t0, "c_run": c_run})
+
+    def settle(self, end):
+        """After the program's end: record until the spindle stands and the axes are in position
+        (the reference's end comes once the spindle has stopped), at most 30 s."""
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 30:
+            s.poll()
+            errors(self.msgs, self.clock)
+            if s.inpos and abs(hal.get_value("spindle-speed-limited")) < 1e-9:
+                break
+            time.sleep(0.002)
+        end["settled"] = self.clock.now()
+        return end
+
+    def finish(self, out, sampler, result):
+        time.sleep(0.03)
+        hal.set_p("sampler.0.enable", "0")
+        time.sleep(0.1)
+        sampler.terminate()
+        sampler.wait()
+        out.close()
+        errors(self.msgs, self.clock)
+        s.poll()
+        self.acks()
+        for g in self.given:
+            if g["cycle"] is None:
+                g["cycle"] = g["sent"]
+                g["unacknowledged"] = True
+            g.pop("echo", None)
+        result["gcodes"] = list(s.gcodes)
+        result.update({"ok": True, "messages": self.msgs, "states": self.states, "given": self.given})
+        return result
+
+
+def main():
+    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    sock.connect(os.environ["LCNC_AGENT_SOCK"])
+    global SOCK
+    SOCK = sock
+    rfile = sock.makefile("r")
+
+    def answer(obj):
+        sock.sendall((json.dumps(obj) + "\n").encode())
+
+    try:
+        h = hal.component("ncconform_agent")
+        h.ready()
+        wait(lambda: True, 10, "status")
+        msgs = []
+        period_s = 0.001
+        clock = Clock(period_s)
+        machine_on(msgs, clock)
+    except Exception as ex:  # the adapter reports it with LinuxCNC's log
+        answer({"ok": False, "error": f"{type(ex).__name__}: {ex}"})
+        return
+    global COMMANDERS
+    COMMANDERS = Commanders()
+    answer({"ok": True, "version": getattr(linuxcnc, "version", "?")})
+    for line in rfile:
+        req = json.loads(line)
+        if req.get("op") == "quit":
+            break
+        try:
+            clock.period_s = req["cfg"]["period_us"] / 1e6
+            msgs = []
+            prepare(msgs, clock)
+            res = Run(req, clock).run()
+            res["prepare_messages"] = msgs
+            answer(res)
+        except Exception as ex:
+            answer({"ok": False, "error": f"{type(ex).__name__}: {ex}"})
+    try:
+        c.state(linuxcnc.STATE_OFF)
+        c.wait_complete(2.0)
+    except Exception:
+        pass
+
+
+if __name__ == "__main__":
+    main()

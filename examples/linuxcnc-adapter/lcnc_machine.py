@@ -1,0 +1,389 @@
+"""A LinuxCNC machine for one set of `linuxcnc` dialect parameters, and the LinuxCNC instance
+that runs it.
+
+- `machine_config(params)`: the parameters of a `load` (ids and units of docs/parameters.md,
+  over the dialect's defaults) as a LinuxCNC INI file and HAL file: the mapping of
+  `nc-conform params --from-ini` (harness/src/ini.rs) the other way round, or the reason why
+  LinuxCNC cannot be configured like that (the scenario is then not applicable).
+- `Instance`: LinuxCNC started headless (`linuxcnc -r MACHINE.ini`) as an ordinary user (uspace
+  `rtapi_app` refuses root), with `lcnc_agent.py` as its DISPLAY program; the adapter talks to
+  the agent over a Unix socket. One instance serves every scenario with the same configuration.
+
+Standard library only.
+"""
+
+import fcntl
+import json
+import os
+import pwd
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+# The linuxcnc dialect's defaults (docs/parameters.md, `linuxcnc`).
+DEFAULTS = {
+    "nc.rigid_overshoot_pitches": 10.0,
+    "nc.period_us": 1000.0,
+    "nc.rapid_mm_min": 6000.0,
+    "nc.rapid_ramp_ms": 100.0,
+    "nc.backlash_mm": 0.0,
+    "nc.feed_max_mm_min": 6000.0,
+    "nc.feed_ramp_ms": 100.0,
+    "nc.feed_override_max_pct": 120.0,
+    "nc.feed_override_step_pct": 1.0,
+    "nc.spindle_override_min_pct": 0.0,
+    "nc.spindle_override_max_pct": 100.0,
+    "nc.dry_run_mm_min": 2000.0,
+    "nc.spindle_max_rpm": 6000.0,
+    "nc.spindle_ramp_ms": 1000.0,
+    "nc.orient_ms": 500.0,
+    "plc.fin_ms": 0.0,
+    "plc.fin_fall_ms": 0.0,
+    "plc.fin_timeout_ms": 10000.0,
+    "plc.zsp_ms": 8.0,
+}
+PER_AXIS = {"nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm"}
+AXES = "XYZ"
+# Parameters that only shape inputs LinuxCNC has no counterpart for (dry run, G87's orientation
+# time, the FIN timer with M functions completing at once): any value is accepted and unused.
+UNUSED = {"nc.dry_run_mm_min", "nc.orient_ms", "plc.fin_timeout_ms", "plc.fin_fall_ms"}
+# Parameters LinuxCNC has no setting for: only the default value can be honoured.
+FIXED = {
+    "nc.rigid_overshoot_pitches": "LinuxCNC's G33.1 has no overshoot allowance setting",
+    "nc.feed_override_step_pct": "LinuxCNC's feed override is continuous (no switch steps)",
+    "plc.fin_ms": "LinuxCNC has no M function completion (FIN) handshake",
+}
+# A time constant of 0 (no ramp) as an acceleration LinuxCNC accepts.
+NO_RAMP_ACC = 1.0e6
+# Soft limits far beyond any scenario's travel (the reference has none).
+LIMIT_MM = 10000.0
+
+
+class NotApplicable(Exception):
+    """LinuxCNC cannot be set up (or driven) the way the scenario asks."""
+
+
+def resolve(params):
+    """The `load` parameters over the defaults: {id: value} with {axis: value} for per-axis ids.
+
+    Raises NotApplicable for an unknown id or a value LinuxCNC cannot have."""
+    v = {k: ({a: d for a in AXES} if k in PER_AXIS else d) for k, d in DEFAULTS.items()}
+    for p in params:
+        pid, axis, value = p["id"], p.get("axis"), float(p["value"])
+        if pid not in DEFAULTS:
+            raise NotApplicable(f"parameter {pid} has no LinuxCNC setting")
+        if pid in PER_AXIS:
+            for a in (axis,) if axis else AXES:
+                v[pid][a] = value
+        else:
+            v[pid] = value
+    for pid, why in FIXED.items():
+        if v[pid] != DEFAULTS[pid]:
+            raise NotApplicable(f"{pid} = {v[pid]:g}: {why}")
+    return v
+
+
+def num(x):
+    """A number as INI/HAL text (no exponent, no trailing zeros)."""
+    s = f"{x:.9f}".rstrip("0").rstrip(".")
+    return s if s not in ("", "-0") else "0"
+
+
+def machine_config(params):
+    """(ini_text, hal_text, cfg) for the parameters; cfg holds what the agent and the trace need
+    (servo period, override limits, zero-speed time). Raises NotApplicable."""
+    v = resolve(params)
+    period_us = int(v["nc.period_us"])
+    if period_us not in (1000, 2000, 4000, 8000):
+        raise NotApplicable(f"nc.period_us = {period_us}: not a servo period of the model")
+    vel = {a: v["nc.rapid_mm_min"][a] / 60.0 for a in AXES}
+    acc = {}
+    for a in AXES:
+        ramp = v["nc.rapid_ramp_ms"][a]
+        acc[a] = vel[a] / (ramp / 1000.0) if ramp > 0 else NO_RAMP_ACC
+    feed_v = v["nc.feed_max_mm_min"] / 60.0
+    feed_ramp = v["nc.feed_ramp_ms"]
+    feed_a = feed_v / (feed_ramp / 1000.0) if feed_ramp > 0 else NO_RAMP_ACC
+    # LinuxCNC has one velocity and one acceleration per axis for rapids and feeds alike, and
+    # [TRAJ] limits that cap both: the feed settings are representable only when they do not
+    # ask a feed to be slower or to accelerate differently from the rapids.
+    if feed_v < max(vel.values()) - 1e-9:
+        raise NotApplicable(
+            f"nc.feed_max_mm_min {v['nc.feed_max_mm_min']:g} below a rapid rate: LinuxCNC's "
+            "[TRAJ] MAX_LINEAR_VELOCITY caps rapids as well as feeds"
+        )
+    if any(abs(feed_a - acc[a]) > 1e-6 * acc[a] for a in AXES):
+        raise NotApplicable(
+            "the cutting time constant gives another acceleration than the rapid's: LinuxCNC "
+            "has one MAX_ACCELERATION per axis for rapids and feeds"
+        )
+    smax = v["nc.spindle_max_rpm"]
+    sramp = v["nc.spindle_ramp_ms"]
+    spindle_acc = smax / (sramp / 1000.0) if sramp > 0 else NO_RAMP_ACC
+    cfg = {
+        "period_us": period_us,
+        "feed_override_max": v["nc.feed_override_max_pct"] / 100.0,
+        "spindle_override_min": v["nc.spindle_override_min_pct"] / 100.0,
+        "spindle_override_max": v["nc.spindle_override_max_pct"] / 100.0,
+        "zsp_ms": v["plc.zsp_ms"],
+    }
+    ini = [
+        "# Written by examples/linuxcnc-adapter for one scenario's linuxcnc parameters.",
+        "[EMC]", "VERSION = 1.1", "MACHINE = nc-conform-linuxcnc-adapter", "DEBUG = 0", "",
+        "[DISPLAY]", "DISPLAY = ./lcnc_agent.py", "CYCLE_TIME = 0.100",
+        "POSITION_OFFSET = RELATIVE", "POSITION_FEEDBACK = ACTUAL",
+        f"MAX_FEED_OVERRIDE = {num(cfg['feed_override_max'])}",
+        f"MIN_SPINDLE_OVERRIDE = {num(cfg['spindle_override_min'])}",
+        f"MAX_SPINDLE_OVERRIDE = {num(cfg['spindle_override_max'])}",
+        "PROGRAM_PREFIX = .", "",
+        "[TASK]", "TASK = milltask", "CYCLE_TIME = 0.001", "",
+        "[RS274NGC]", "PARAMETER_FILE = machine.var",
+        "RS274NGC_STARTUP_CODE = G17 G21 G40 G49 G54 G80 G90 G94 G99 G8 G64", "",
+        "[EMCMOT]", "EMCMOT = motmod", "COMM_TIMEOUT = 1.0", "BASE_PERIOD = 0",
+        f"SERVO_PERIOD = {period_us * 1000}", "",
+        # LinuxCNC 2.9 runs the IO controller as its own program (2.10 ignores these two).
+        "[EMCIO]", "EMCIO = io", "CYCLE_TIME = 0.001", "TOOL_TABLE = machine.tbl", "",
+        "[HAL]", "HALFILE = machine.hal", "",
+        "[TRAJ]", "COORDINATES = X Y Z", "LINEAR_UNITS = mm", "ANGULAR_UNITS = degree",
+        f"DEFAULT_LINEAR_VELOCITY = {num(max(vel.values()))}",
+        f"MAX_LINEAR_VELOCITY = {num(max(feed_v, max(vel.values())))}",
+        f"DEFAULT_LINEAR_ACCELERATION = {num(max(acc.values()))}",
+        f"MAX_LINEAR_ACCELERATION = {num(max(acc.values()))}", "",
+        "[KINS]", "KINEMATICS = trivkins", "JOINTS = 3", "",
+        "[SPINDLE_0]", f"MAX_FORWARD_VELOCITY = {num(smax)}", f"MAX_REVERSE_VELOCITY = {num(smax)}", "",
+    ]
+    for i, a in enumerate(AXES):
+        ini += [
+            f"[AXIS_{a}]", f"MAX_VELOCITY = {num(vel[a])}", f"MAX_ACCELERATION = {num(acc[a])}",
+            f"MIN_LIMIT = {num(-LIMIT_MM)}", f"MAX_LIMIT = {num(LIMIT_MM)}", "",
+            f"[JOINT_{i}]", "TYPE = LINEAR", "HOME = 0", f"MAX_VELOCITY = {num(vel[a])}",
+            f"MAX_ACCELERATION = {num(acc[a])}", f"BACKLASH = {num(v['nc.backlash_mm'][a])}",
+            f"MIN_LIMIT = {num(-LIMIT_MM)}", f"MAX_LIMIT = {num(LIMIT_MM)}",
+            "FERROR = 1.27", "MIN_FERROR = 0.254", "HOME_OFFSET = 0", "HOME_SEARCH_VEL = 0",
+            "HOME_LATCH_VEL = 0", "HOME_SEQUENCE = 0", "",
+        ]
+    hal = HAL_TEMPLATE.replace("@SPINDLE_ACC@", num(spindle_acc))
+    return "\n".join(ini) + "\n", hal, cfg
+
+
+# LinuxCNC's lib/hallib core_sim.hal and sim_spindle_encoder.hal, with the spindle's ramp from the
+# parameters, a stall switch in front of the simulated spindle (the `spindle_stall` fault), a servo
+# cycle clock for the agent, and the sampler that records every servo cycle.
+HAL_TEMPLATE = """\
+loadrt [KINS]KINEMATICS
+loadrt [EMCMOT]EMCMOT base_period_nsec=[EMCMOT]BASE_PERIOD servo_period_nsec=[EMCMOT]SERVO_PERIOD num_joints=[KINS]JOINTS
+addf motion-command-handler servo-thread
+addf motion-controller servo-thread
+net Xpos joint.0.motor-pos-cmd => joint.0.motor-pos-fb
+net Ypos joint.1.motor-pos-cmd => joint.1.motor-pos-fb
+net Zpos joint.2.motor-pos-cmd => joint.2.motor-pos-fb
+net estop-loop iocontrol.0.user-enable-out iocontrol.0.emc-enable-in
+net tool-prep-loop iocontrol.0.tool-prepare iocontrol.0.tool-prepared
+net tool-change-loop iocontrol.0.tool-change iocontrol.0.tool-changed
+
+# simulated spindle with encoder index (sim_spindle_encoder.hal), ramp @SPINDLE_ACC@ rpm/s
+loadrt sim_spindle names=sim_spindle
+setp sim_spindle.scale 0.01666667
+loadrt limit2 names=limit_speed
+loadrt lowpass names=spindle_mass
+loadrt near names=near_speed
+loadrt scale names=rpm_rps
+loadrt mux2 names=stall
+setp rpm_rps.gain .0167
+setp limit_speed.maxv @SPINDLE_ACC@
+net spindle-index-enable spindle.0.index-enable <=> sim_spindle.index-enable
+net spindle-pos sim_spindle.position-fb => spindle.0.revs
+setp spindle_mass.gain .07
+net spindle-speed-cmd spindle.0.speed-out => limit_speed.in
+net spindle-speed-drive limit_speed.out => stall.in0
+setp stall.in1 0
+setp stall.sel 0
+net spindle-speed-limited stall.out => sim_spindle.velocity-cmd spindle_mass.in
+net spindle-rpm-filtered spindle_mass.out near_speed.in2
+net spindle-rpm-filtered rpm_rps.in
+net spindle-rps-filtered rpm_rps.out spindle.0.speed-in
+setp near_speed.scale 1.1
+setp near_speed.difference 10
+net spindle-speed-cmd => near_speed.in1
+net spindle-at-speed near_speed.out spindle.0.at-speed
+addf limit_speed servo-thread
+addf stall servo-thread
+addf spindle_mass servo-thread
+addf rpm_rps servo-thread
+addf near_speed servo-thread
+addf sim_spindle servo-thread
+
+# servo cycle clock (seconds of servo time) for the agent
+loadrt integ names=servo_clock
+setp servo_clock.in 1
+addf servo_clock servo-thread
+
+# every servo cycle into the sampler FIFO (read by halsampler); columns: see lcnc_trace.COLUMNS
+loadrt sampler depth=65536 cfg=fffffffbbbbbbbbss
+setp sampler.0.enable 0
+net Xpos => sampler.0.pin.0
+net Ypos => sampler.0.pin.1
+net Zpos => sampler.0.pin.2
+net spindle-speed-limited => sampler.0.pin.3
+net spindle-pos => sampler.0.pin.4
+net spindle-speed-cmd => sampler.0.pin.5
+net clock servo_clock.out => sampler.0.pin.6
+net sp-on spindle.0.on => sampler.0.pin.7
+net sp-fwd spindle.0.forward => sampler.0.pin.8
+net sp-rev spindle.0.reverse => sampler.0.pin.9
+net spindle-at-speed => sampler.0.pin.10
+net spindle-index-enable => sampler.0.pin.11
+net in-pos motion.in-position => sampler.0.pin.12
+net flood iocontrol.0.coolant-flood => sampler.0.pin.13
+net mist iocontrol.0.coolant-mist => sampler.0.pin.14
+net prog-line motion.program-line => sampler.0.pin.15
+net mot-type motion.motion-type => sampler.0.pin.16
+addf sampler.0 servo-thread
+"""
+
+
+def running_linuxcnc():
+    """Process ids of a LinuxCNC already running on this machine (any user's)."""
+    out = subprocess.run(["pgrep", "-f", "rtapi_app|milltask|linuxcncsvr"], capture_output=True, text=True)
+    return [int(p) for p in out.stdout.split()]
+
+
+def log(*a):
+    print("lcnc-adapter:", *a, file=sys.stderr, flush=True)
+
+
+class Instance:
+    """One LinuxCNC instance running one machine configuration, driven through its agent.
+
+    LinuxCNC instances cannot share a machine: the instance holds `lock_path` (flock, as
+    `flock /tmp/linuxcnc.lock CMD` does) while it runs, and waits first until no other LinuxCNC
+    process is left."""
+
+    def __init__(self, ini, hal, user, lock_path, start_timeout=120.0):
+        self.user = user
+        self.proc = None
+        self.conn = None
+        self.lock = open(lock_path, "a")
+        t0 = time.monotonic()
+        fcntl.flock(self.lock, fcntl.LOCK_EX)
+        while running_linuxcnc():
+            if time.monotonic() - t0 > start_timeout:
+                self.lock.close()
+                raise RuntimeError("another LinuxCNC is still running (pgrep rtapi_app|milltask|linuxcncsvr)")
+            time.sleep(1.0)
+        self.dir = tempfile.mkdtemp(prefix="lcnc-adapter.")
+        for name, text in (("machine.ini", ini), ("machine.hal", hal), ("machine.tbl", "T1 P1 D0 Z0 ;\n")):
+            with open(os.path.join(self.dir, name), "w") as f:
+                f.write(text)
+        shutil.copy(os.path.join(HERE, "lcnc_agent.py"), os.path.join(self.dir, "lcnc_agent.py"))
+        os.chmod(os.path.join(self.dir, "lcnc_agent.py"), 0o755)
+        sock_path = os.path.join(self.dir, "agent.sock")
+        self.server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        self.server.bind(sock_path)
+        self.server.listen(1)
+        self.server.settimeout(start_timeout)
+        env = {
+            "PATH": "/usr/sbin:/usr/bin:/sbin:/bin",
+            "HOME": self.dir,
+            "LCNC_AGENT_SOCK": sock_path,
+        }
+        cmd = ["linuxcnc", "-r", "machine.ini"]
+        if os.getuid() == 0:
+            uid = pwd.getpwnam(user)
+            for root, dirs, files in os.walk(self.dir):
+                for n in dirs + files + ["."]:
+                    os.chown(os.path.join(root, n) if n != "." else root, uid.pw_uid, uid.pw_gid)
+            os.chmod(self.dir, 0o755)
+            cmd = ["runuser", "-u", user, "--", "env"] + [f"{k}={v}" for k, v in env.items()] + cmd
+            env = None
+        self.logf = open(os.path.join(self.dir, "linuxcnc.log"), "w")
+        self.proc = subprocess.Popen(cmd, cwd=self.dir, env=env, stdout=self.logf, stderr=subprocess.STDOUT,
+                                     stdin=subprocess.DEVNULL, start_new_session=True)
+        try:
+            self.conn, _ = self.server.accept()
+        except socket.timeout:
+            self.close()
+            raise RuntimeError("LinuxCNC did not start its agent: " + self.log_tail())
+        self.conn.settimeout(None)
+        self.prioritise()
+        self.rfile = self.conn.makefile("r")
+        hello = self.receive()
+        if not hello.get("ok"):
+            why = hello.get("error", "?")
+            self.close()
+            raise RuntimeError("LinuxCNC's agent failed to start: " + why)
+        self.version = hello.get("version", "?")
+
+    def prioritise(self):
+        """LinuxCNC wants a real-time kernel; on an ordinary one its processes (servo thread,
+        task, the agent that gives the inputs) at least get a higher priority than the rest of
+        the machine when root can give it (nice -10), so that inputs are given on time."""
+        if os.getuid() != 0:
+            return
+        out = subprocess.run(["pgrep", "-u", self.user], capture_output=True, text=True).stdout.split()
+        for pid in out:
+            try:
+                os.setpriority(os.PRIO_PROCESS, int(pid), -10)
+            except OSError:
+                pass
+
+    def log_tail(self, n=2000):
+        try:
+            with open(os.path.join(self.dir, "linuxcnc.log")) as f:
+                return f.read()[-n:]
+        except OSError:
+            return ""
+
+    def receive(self):
+        line = self.rfile.readline()
+        if not line:
+            raise RuntimeError("LinuxCNC's agent stopped: " + self.log_tail())
+        return json.loads(line)
+
+    def call(self, request):
+        self.conn.sendall((json.dumps(request) + "\n").encode())
+        return self.receive()
+
+    def alive(self):
+        return self.proc is not None and self.proc.poll() is None
+
+    def close(self):
+        """Shuts LinuxCNC down (the agent's exit ends the `linuxcnc` script), then makes sure no
+        rtapi_app of the user is left, and releases the lock."""
+        if self.conn is not None:
+            try:
+                self.conn.sendall(b'{"op":"quit"}\n')
+            except OSError:
+                pass
+        if self.proc is not None:
+            try:
+                self.proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.proc.pid, 15)
+                try:
+                    self.proc.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    os.killpg(self.proc.pid, 9)
+            for _ in range(100):
+                if not running_linuxcnc():
+                    break
+                time.sleep(0.1)
+            else:
+                subprocess.run(["runuser", "-u", self.user, "--", "halrun", "-U"] if os.getuid() == 0
+                               else ["halrun", "-U"], capture_output=True)
+        self.proc = None
+        try:
+            self.server.close()
+        except OSError:
+            pass
+        try:
+            self.logf.close()
+        except (OSError, AttributeError):
+            pass
+        shutil.rmtree(self.dir, ignore_errors=True)
+        self.lock.close()
