@@ -51,7 +51,9 @@ def errors(sink, clock):
         if not m:
             return
         kind, text = m
-        sink.append({"cycle": clock.now(), "kind": int(kind), "text": str(text)})
+        s.poll()
+        sink.append({"cycle": clock.now(), "kind": int(kind), "text": str(text), "read_line": s.read_line,
+                     "current_line": s.current_line, "motion_line": s.motion_line})
 
 
 def wait(cond, timeout, what, sink=None, clock=None):

@@ -146,6 +146,8 @@ class Program:
             self.sync[i] = 33 in g
             if 33.1 in g:
                 self.kind[i] = "g331"
+            elif 33 in g:
+                self.kind[i] = "g33"
             elif 76 in g:
                 self.kind[i] = "g76"
             elif mode is not None and mode == int(mode) and int(mode) in self.CYCLES and (axes or any(v == mode for v in g)):
@@ -229,7 +231,7 @@ class Trace:
     def next_sync_line(self):
         """The first line not started yet with a synchronised move (G33, G33.1, G76)."""
         for line in range(self.next_block, len(self.prog.lines) + 1):
-            if self.prog.kind.get(line) in ("g331", "g76") or self.prog.sync.get(line):
+            if self.prog.kind.get(line) in ("g331", "g33", "g76"):
                 return line
         return None
 
@@ -292,7 +294,8 @@ class Trace:
             while msgs and msgs[0]["cycle"] <= c:
                 m = msgs.pop(0)
                 line = re.search(r"[Ll]ine (\d+)", m["text"])
-                self.alarm(t, alarm_code(m["text"]), m["text"].strip(), int(line.group(1)) if line else None)
+                line = int(line.group(1)) if line else (m.get("read_line") or None)
+                self.alarm(t, alarm_code(m["text"]), m["text"].strip(), line)
             self.row(prev, r, t)
             # ZSP: commanded off and standing for plc.zsp_ms
             if not r["on"] and abs(r["rpm"]) < 1e-9:
@@ -413,9 +416,9 @@ class Trace:
             self.block(t, line)
             self.next_block = saved
         kind = self.prog.kind.get(line)
-        if kind == "g331":
+        if kind in ("g331", "g33"):
             self.set_phase(t, "cutting")
-            self.g331_dir = spin(r) or None
+            self.g331_dir = (spin(r) or None) if kind == "g331" else None
         elif kind:
             self.set_phase(t, "positioning")
         self.cycle_since = r["cycle"]
@@ -443,6 +446,8 @@ class Trace:
         moving = any(abs(r[a] - p[a]) > 1e-9 for a in "XYZ")
         mtype = int(r["mtype"])
         ph = self.phase
+        if kind == "g33":
+            return
         if kind == "g331":
             if ph == "cutting" and self.g331_dir and r["rpm"] * self.g331_dir < 0:
                 self.set_phase(t, "retract")
