@@ -27,7 +27,9 @@ import argparse
 import json
 import math
 import os
+import re
 import shutil
+import subprocess
 import sys
 import time
 
@@ -70,6 +72,7 @@ class Scenario:
         self.runs = 0
         self.t0_lead = 2
         self.stops = []  # [(condition, t_us)] where advance stopped
+        self.interp_error = None
         self.ended = False
         self.leads = {}  # input name -> µs LinuxCNC's task took to take it in the last run
         self.fired = set()  # (condition, t_us) already stopped on
@@ -131,6 +134,7 @@ class Adapter:
             f.write(req["program"])
         os.chmod(path, 0o644)
         self.sc.path = path
+        self.sc.interp_error = interp_error(path, req["program"])
         return {"ok": True}
 
     def input(self, req):
@@ -176,6 +180,7 @@ class Adapter:
         rows = lcnc_trace.read_rows(out, sc.cfg["period_us"])
         if not rows:
             raise RuntimeError("nothing recorded: " + inst.log_tail(800))
+        res["interp_error"] = sc.interp_error
         tr = lcnc_trace.Trace(sc.job["program"], rows, res, sc.cfg, sc.job["sample_us"])
         events = tr.build()
         if self.args.keep:
@@ -362,6 +367,27 @@ class Tracker:
             if k == "function" and f"{e['letter']}{e['code']}" == f.upper():
                 return e["t_us"]
         return None
+
+
+def interp_error(path, program):
+    """The line LinuxCNC's interpreter stops at, as its standalone `rs274` (the same
+    interpreter; AXIS's preview) reports it: its message and the offending block's text, found in
+    the program. LinuxCNC's task reports the message without the line. None: no error."""
+    try:
+        out = subprocess.run(["rs274", "-g", path], capture_output=True, text=True, timeout=30,
+                             stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    lines = [l for l in (out.stdout + out.stderr).splitlines() if l.strip() and l.strip() != "executing"]
+    canon = re.compile(r"^\s*\d+ N\.\.\.\.\. ")
+    text = [l for l in lines if not canon.match(l)]
+    if out.returncode == 0 or len(text) < 2:
+        return None
+    message, block = text[-2].strip(), text[-1].strip()
+    for n, l in enumerate(program.split("\n"), 1):
+        if l.strip() == block:
+            return {"message": message, "line": n}
+    return {"message": message, "line": None}
 
 
 def linuxcnc_version():

@@ -161,7 +161,8 @@ def adapter_gone():
     if not r:
         return False
     try:
-        return SOCK.recv(1, socket.MSG_PEEK) == b""
+        head = SOCK.recv(16, socket.MSG_PEEK)
+        return head == b"" or head.startswith(b'{"op":"quit"')
     except OSError:
         return True
 
@@ -375,7 +376,9 @@ class Run:
                 if p["input"]["name"] == "reset":
                     reset_at = now
             running = st[0] != linuxcnc.INTERP_IDLE
-            started = started or running or t0 is not None
+            # started: seen running, or an output changed, or still idle 200 ms after the run
+            # command (an error before the first block ends it at once)
+            started = started or running or t0 is not None or now - c_run > 200 * per_ms
             if reset_at is not None and now - reset_at > 20 * per_ms:
                 end = {"reason": "reset", "cycle": reset_at}
             elif t0 is not None and now - t0 >= limit_cycles:

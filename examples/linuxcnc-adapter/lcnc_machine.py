@@ -110,17 +110,17 @@ def machine_config(params):
     feed_ramp = v["nc.feed_ramp_ms"]
     feed_a = feed_v / (feed_ramp / 1000.0) if feed_ramp > 0 else NO_RAMP_ACC
     # LinuxCNC has one velocity and one acceleration per axis for rapids and feeds alike, and
-    # [TRAJ] limits that cap both: the feed settings are representable only when they do not
-    # ask a feed to be slower or to accelerate differently from the rapids.
-    if feed_v < max(vel.values()) - 1e-9:
+    # [TRAJ] limits that cap both. `nc-conform params --from-ini` (harness/src/ini.rs) reads the
+    # cutting feed's limit as the smallest axis velocity and its time constant as that velocity
+    # over the smallest acceleration: a scenario whose feed settings differ from what its axes
+    # give cannot be set up on LinuxCNC.
+    v_min, a_min = min(vel.values()), min(acc.values())
+    want = (round(v_min * 60, 6), round(v_min / a_min * 1000, 6))
+    have = (round(feed_v * 60, 6), round(feed_v / feed_a * 1000, 6) if feed_ramp > 0 else 0.0)
+    if want != have:
         raise NotApplicable(
-            f"nc.feed_max_mm_min {v['nc.feed_max_mm_min']:g} below a rapid rate: LinuxCNC's "
-            "[TRAJ] MAX_LINEAR_VELOCITY caps rapids as well as feeds"
-        )
-    if any(abs(feed_a - acc[a]) > 1e-6 * acc[a] for a in AXES):
-        raise NotApplicable(
-            "the cutting time constant gives another acceleration than the rapid's: LinuxCNC "
-            "has one MAX_ACCELERATION per axis for rapids and feeds"
+            f"nc.feed_max_mm_min {have[0]:g} / nc.feed_ramp_ms {have[1]:g}: LinuxCNC's feeds share the "
+            f"axes' limits (the slowest axis gives {want[0]:g} mm/min in {want[1]:g} ms)"
         )
     smax = v["nc.spindle_max_rpm"]
     sramp = v["nc.spindle_ramp_ms"]

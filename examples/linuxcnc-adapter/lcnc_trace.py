@@ -295,6 +295,9 @@ class Trace:
                 m = msgs.pop(0)
                 line = re.search(r"[Ll]ine (\d+)", m["text"])
                 line = int(line.group(1)) if line else (m.get("read_line") or None)
+                ie = self.agent.get("interp_error")
+                if line is None and ie and ie["message"] == m["text"].strip():
+                    line = ie["line"]
                 self.alarm(t, alarm_code(m["text"]), m["text"].strip(), line)
             self.row(prev, r, t)
             # ZSP: commanded off and standing for plc.zsp_ms
@@ -327,8 +330,12 @@ class Trace:
         if reason == "reset":
             resets = [g["cycle"] for g in self.agent.get("given", []) if g["input"]["name"] == "reset"]
             return (max(resets[0], self.t0) if resets else end["cycle"]), reason
-        if reason in ("time_limit", "stopped"):
+        if reason == "time_limit":
             return end["cycle"], reason
+        if reason == "stopped":
+            # held with nothing to release it: the run ends where the hold began
+            holds = [st["cycle"] for st in self.agent.get("states", []) if st["paused"]]
+            return (max(holds[-1], self.t0) if holds else end["cycle"]), reason
         if end.get("estop"):
             es = [g["cycle"] for g in self.agent.get("given", [])
                   if g["input"]["name"] == "emergency_stop" and g["input"].get("on")]

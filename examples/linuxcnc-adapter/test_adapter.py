@@ -1,0 +1,173 @@
+#!/usr/bin/env python3
+"""Tests of the LinuxCNC adapter's parts that need no LinuxCNC (run by
+harness/tests/linuxcnc_adapter.rs, or `NC_CONFORM=target/debug/nc-conform python3 test_adapter.py`):
+
+- the machine configuration written for a scenario's parameters reads back, through
+  `nc-conform params --from-ini` (the project's own INI mapping), as those parameters;
+- parameters LinuxCNC cannot have are not applicable, with the reason;
+- a recording (servo-cycle rows) becomes trace events: time 0 at the first output, samples
+  showing the state before their µs, M3/S with their block, the G33.1 phases, exact decimals;
+- the stop conditions of `advance` over trace events, an axis crossing at its interpolated µs.
+"""
+
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import lcnc_adapter  # noqa: E402
+import lcnc_machine  # noqa: E402
+import lcnc_trace  # noqa: E402
+
+NC = os.environ.get("NC_CONFORM", "nc-conform")
+
+
+def from_ini(ini_text):
+    """{id: value or {axis: value}} as `nc-conform params --from-ini` maps the INI."""
+    with tempfile.NamedTemporaryFile("w", suffix=".ini", delete=False) as f:
+        f.write(ini_text)
+    try:
+        out = subprocess.run([NC, "params", "--from-ini", f.name], capture_output=True, text=True, check=True).stdout
+    finally:
+        os.unlink(f.name)
+    params, cur = {}, None
+    for line in out.splitlines():
+        code = line.split("#")[0].rstrip()
+        if not code.strip() or code.strip() == "params:":
+            continue
+        key, _, value = code.strip().partition(":")
+        if line.startswith("    "):
+            params[cur][key] = float(value)
+        elif value.strip():
+            params[key] = float(value)
+        else:
+            cur = key
+            params[cur] = {}
+    return params
+
+
+class MachineConfig(unittest.TestCase):
+    CASES = [
+        [],
+        [{"id": "nc.spindle_max_rpm", "value": 4000}, {"id": "nc.feed_override_max_pct", "value": 150},
+         {"id": "nc.spindle_override_min_pct", "value": 50}, {"id": "nc.spindle_override_max_pct", "value": 120}],
+        [{"id": "nc.rapid_mm_min", "value": 3000}, {"id": "nc.rapid_ramp_ms", "value": 50},
+         {"id": "nc.feed_max_mm_min", "value": 3000}, {"id": "nc.feed_ramp_ms", "value": 50},
+         {"id": "nc.backlash_mm", "axis": "X", "value": 0.01}, {"id": "nc.period_us", "value": 2000}],
+        [{"id": "nc.rapid_mm_min", "axis": "X", "value": 12000}, {"id": "nc.rapid_ramp_ms", "axis": "X", "value": 200}],
+    ]
+
+    def test_the_ini_reads_back_as_the_parameters(self):
+        for params in self.CASES:
+            ini, hal, cfg = lcnc_machine.machine_config(params)
+            want = lcnc_machine.resolve(params)
+            got = from_ini(ini)
+            self.assertGreaterEqual(len(got), 9, got)
+            for pid, value in got.items():
+                with self.subTest(params=params, id=pid):
+                    self.assertEqual(value, want[pid])
+            self.assertIn("setp limit_speed.maxv", hal)
+
+    def test_the_spindle_ramp_is_the_hals(self):
+        _, hal, _ = lcnc_machine.machine_config([{"id": "nc.spindle_ramp_ms", "value": 20000}])
+        self.assertIn("setp limit_speed.maxv 300\n", hal)  # 6000 rpm in 20 s
+
+    def test_what_linuxcnc_cannot_have_is_not_applicable(self):
+        for params, says in [
+            ([{"id": "nc.rapid_mm_min", "axis": "Z", "value": 3000}], "slowest axis gives 3000"),
+            ([{"id": "plc.fin_ms", "value": 50}], "no M function completion"),
+            ([{"id": "nc.rigid_overshoot_pitches", "value": 5}], "overshoot"),
+            ([{"id": "271", "value": 1}], "no LinuxCNC setting"),
+        ]:
+            with self.assertRaises(lcnc_machine.NotApplicable) as e:
+                lcnc_machine.machine_config(params)
+            self.assertIn(says, str(e.exception))
+
+
+def row(cycle, z=0.0, rpm=0.0, revs=0.0, cmd=0.0, on=0, fwd=0, rev=0, line=0, mtype=0, index=0):
+    return {"n": cycle, "X": 0.0, "Y": 0.0, "Z": z, "rpm": rpm, "revs": revs, "speed_cmd": cmd,
+            "clock": cycle / 1000.0, "on": on, "fwd": fwd, "rev": rev, "at_speed": 0, "index": index,
+            "inpos": 1, "flood": 0, "mist": 0, "line": line, "mtype": mtype, "cycle": cycle}
+
+
+class Recording(unittest.TestCase):
+    PROGRAM = "G21 M3 S500\nG0 X0 Z5\nG33.1 Z-1 K1\nM2\n"
+    CFG = {"period_us": 1000, "zsp_ms": 8}
+
+    def rows(self):
+        rows = [row(c) for c in range(100, 110)]
+        c = 110
+        # M3 at cycle 110: on, forward, the speed ramps 6 rpm per cycle
+        for k in range(5):
+            rows.append(row(c + k, rpm=6.0 * (k + 1), revs=0.0001 * k, cmd=500, on=1, fwd=1))
+        # the rapid (line 2) from 115
+        for k in range(5):
+            rows.append(row(115 + k, z=0.5 * (k + 1), rpm=30, revs=0.1, cmd=500, on=1, fwd=1, line=2, mtype=1))
+        # the index is armed at 120 (G33.1 begins), the tap runs from 122, the spindle reverses at 125
+        rows.append(row(120, z=2.5, rpm=30, revs=0.2, cmd=500, on=1, fwd=1, index=1))
+        rows.append(row(121, z=2.5, rpm=30, revs=1.0, cmd=500, on=1, fwd=1))
+        for k in range(3):
+            rows.append(row(122 + k, z=2.4 - 0.1 * k, rpm=30, revs=1.1, cmd=500, on=1, fwd=1, line=3))
+        for k in range(3):
+            rows.append(row(125 + k, z=2.2, rpm=-30, revs=1.2, cmd=-500, on=1, rev=1, line=3))
+        return rows
+
+    def test_a_recording_becomes_trace_events(self):
+        agent = {"c_run": 105, "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4}],
+                 "given": [], "messages": [], "end": {"reason": "program_end", "cycle": 127, "settled": 127}}
+        tr = lcnc_trace.Trace(self.PROGRAM, self.rows(), agent, self.CFG, 1000)
+        self.assertEqual(tr.t0, 110)
+        ev = tr.build()
+        text = [lcnc_trace.dumps(e) for e in ev]
+        samples = [e for e in ev if e["kind"] == "sample"]
+        # the sample at 0 is the state before M3; at 1 ms the first step of the ramp
+        self.assertEqual(lcnc_trace.dumps(samples[0]["spindle"]), '{"rpm":0,"angle_deg":0}')
+        self.assertEqual(lcnc_trace.dumps(samples[1]["spindle"]), '{"rpm":6,"angle_deg":0}')
+        self.assertIn('{"t_us":0,"kind":"block","line":1,"text":"G21 M3 S500"}', text)
+        self.assertIn('{"t_us":0,"kind":"function","letter":"S","code":500}', text)
+        self.assertIn('{"t_us":0,"kind":"function","letter":"M","code":3}', text)
+        self.assertIn('{"t_us":5000,"kind":"block","line":2,"text":"G0 X0 Z5"}', text)
+        # G33.1 starts when the index is armed, the retract when the spindle turns backwards
+        self.assertIn('{"t_us":10000,"kind":"block","line":3,"text":"G33.1 Z-1 K1"}', text)
+        self.assertIn('{"t_us":10000,"kind":"phase","name":"cutting"}', text)
+        self.assertIn('{"t_us":15000,"kind":"phase","name":"retract"}', text)
+        self.assertNotIn("M4", " ".join(t for t in text if '"function"' in t))
+        self.assertEqual(ev[-1]["kind"], "end")
+        times = [e["t_us"] for e in ev]
+        self.assertEqual(times, sorted(times))
+
+    def test_exact_decimals(self):
+        for x, digits, want in [(0.000001, 6, "0.000001"), (-12.5, 6, "-12.5"), (50.0, 6, "50"),
+                                (-0.0000004, 6, "0"), (359.9996, 3, "360"), (2.999994, 6, "2.999994")]:
+            self.assertEqual(lcnc_trace.dec(x, digits), want)
+
+    def test_interpreter_codes(self):
+        self.assertEqual(lcnc_trace.alarm_code("R less than z in cycle in xy plane"), "NC-1092")
+        self.assertEqual(lcnc_trace.alarm_code("Cannot feed with zero feed rate"), "NC-1091")
+        self.assertEqual(lcnc_trace.alarm_code("K word missing with g33/g33.1"), "NC-1096")
+        self.assertEqual(lcnc_trace.alarm_code("Spindle not turning in g88"), "NC-1095")
+
+
+class Conditions(unittest.TestCase):
+    def test_an_axis_crossing_stops_at_its_interpolated_us(self):
+        tr = lcnc_adapter.Tracker({"axis": "Z", "below": -1.5})
+        s = lambda t, z: {"t_us": t, "kind": "sample", "axes": {"Z": lcnc_trace.Raw(lcnc_trace.dec(z, 6))}}
+        self.assertIsNone(tr.see(s(0, 0)))
+        self.assertIsNone(tr.see(s(1000, -1)))
+        self.assertEqual(tr.see(s(2000, -2)), 1500)
+
+    def test_signals_phases_blocks_functions(self):
+        ev = {"t_us": 7, "kind": "signal", "name": "SPL", "value": 1}
+        self.assertEqual(lcnc_adapter.Tracker({"signal": "SPL", "value": 1}).see(ev), 7)
+        self.assertIsNone(lcnc_adapter.Tracker({"signal": "SPL", "value": 0}).see(ev))
+        self.assertEqual(lcnc_adapter.Tracker({"phase": "cutting"}).see({"t_us": 3, "kind": "phase", "name": "cutting"}), 3)
+        self.assertEqual(lcnc_adapter.Tracker({"block": 4}).see({"t_us": 5, "kind": "block", "line": 4, "text": ""}), 5)
+        f = {"t_us": 9, "kind": "function", "letter": "M", "code": 3}
+        self.assertEqual(lcnc_adapter.Tracker({"function": "M3"}).see(f), 9)
+
+
+if __name__ == "__main__":
+    unittest.main()
