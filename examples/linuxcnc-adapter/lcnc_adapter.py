@@ -123,7 +123,7 @@ class Adapter:
         if req.get("dialect") != "linuxcnc":
             return {"ok": False, "unsupported": f"LinuxCNC does not run {req.get('dialect')}"}
         try:
-            ini, hal, cfg = lcnc_machine.machine_config(req.get("params", []))
+            ini, hal, cfg = lcnc_machine.machine_config(req.get("params", []), self.args.path_mode)
         except lcnc_machine.NotApplicable as e:
             return {"ok": False, "unsupported": f"not applicable: {e}"}
         self.ensure_instance(ini, hal)
@@ -169,6 +169,7 @@ class Adapter:
                         "lead_us": self.leads.get(i["input"]["name"], 2 * sc.cfg["period_us"])} for i in sc.inputs],
             "time_limit_us": sc.job["time_limit_us"], "auto_cycle_start": sc.job["auto_cycle_start"],
             "t0_lead": sc.t0_lead, "cfg": sc.cfg, "hold_ms": 500,
+            "budget_us": min(sc.job["time_limit_us"], int(self.args.max_run_s * 1e6)),
         }
         t = time.monotonic()
         res = inst.call(req)
@@ -177,6 +178,9 @@ class Adapter:
             raise RuntimeError("LinuxCNC run failed: " + res.get("error", "?") + "\n" + inst.log_tail(800))
         if "not_applicable" in res:
             return res
+        if res["end"]["reason"] == "over_budget":
+            return {"not_applicable": f"LinuxCNC's run went past the adapter's budget of {self.args.max_run_s:g} s "
+                                      f"of machine time (--max-run-s) before the scenario's own end"}
         rows = lcnc_trace.read_rows(out, sc.cfg["period_us"])
         if not rows:
             raise RuntimeError("nothing recorded: " + inst.log_tail(800))
@@ -405,6 +409,11 @@ def main():
     ap.add_argument("--lock", default="/tmp/linuxcnc.lock", help="flock file shared by LinuxCNC users")
     ap.add_argument("--log", default=os.environ.get("LCNC_ADAPTER_LOG"),
                     help="append the runs' timing and accuracy here (JSON lines)")
+    ap.add_argument("--max-run-s", type=float, default=float(os.environ.get("LCNC_MAX_RUN_S", 120)),
+                    help="stop a LinuxCNC run after this much machine time (default 120 s); a scenario "
+                         "that needs longer is not applicable")
+    ap.add_argument("--path-mode", choices=["G64", "G61"], default="G64",
+                    help="power-on path mode: LinuxCNC's default G64 (blending), or G61 (exact stop)")
     ap.add_argument("--keep", default=os.environ.get("LCNC_ADAPTER_KEEP"),
                     help="keep every run's recording, agent log and trace in this folder")
     Adapter(ap.parse_args()).serve()

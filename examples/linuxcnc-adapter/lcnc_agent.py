@@ -96,13 +96,13 @@ def machine_on(msgs, clock):
 POWER_ON_MDI = [
     "G92.1",
     "G10 L2 P1 X0 Y0 Z0",
-    "G17 G21 G40 G49 G54 G80 G90 G94 G99 G8 G64 M5 M9",
+    "G17 G21 G40 G49 G54 G80 G90 G94 G99 G8 {path_mode} M5 M9",
     "F0 S0",
     "G53 G0 X0 Y0 Z0",
 ]
 
 
-def prepare(msgs, clock):
+def prepare(msgs, clock, path_mode="G64"):
     """Power-on state: aborted, machine on and homed, power-on modes, overrides 100 %, at machine
     zero, spindle stopped with its angle at 0 (the sim spindle's position reset)."""
     c.abort()
@@ -114,6 +114,7 @@ def prepare(msgs, clock):
     c.reset_interpreter()
     c.wait_complete()
     for line in POWER_ON_MDI:
+        line = line.format(path_mode=path_mode)
         c.mdi(line)
         c.wait_complete(5.0)
         wait(lambda: s.interp_state == linuxcnc.INTERP_IDLE, 30, "MDI " + line, msgs, clock)
@@ -289,7 +290,14 @@ class Run:
         """Stamps the inputs LinuxCNC's task has now taken."""
         for g in self.given:
             if g["cycle"] is None:
-                took = s.task_state == linuxcnc.STATE_ESTOP if g["estop"] else s.echo_serial_number != g["echo"]
+                name = g["input"]["name"]
+                # taken: the task echoes the command's serial, or its state shows the command (an
+                # abort's echo comes only once it is done, ~150 ms after motion stopped)
+                took = s.echo_serial_number != g["echo"] or (
+                    (g["estop"] and s.task_state == linuxcnc.STATE_ESTOP)
+                    or (name == "reset" and s.interp_state == linuxcnc.INTERP_IDLE)
+                    or (name == "feed_hold" and s.interp_state == linuxcnc.INTERP_PAUSED)
+                )
                 if took:
                     g["cycle"] = self.clock.now()
                     if g["input"]["name"] == "cycle_start" and self.single_block:
@@ -348,6 +356,7 @@ class Run:
         last = None
         end = None
         limit_cycles = int(req["time_limit_us"] // self.period_us)
+        budget_cycles = int(req.get("budget_us", req["time_limit_us"]) // self.period_us) + 1000 * int(per_ms)
         started = False
         held_since = None
         reset_at = None
@@ -379,14 +388,18 @@ class Run:
             # started: seen running, or an output changed, or still idle 200 ms after the run
             # command (an error before the first block ends it at once)
             started = started or running or t0 is not None or now - c_run > 200 * per_ms
-            if reset_at is not None and now - reset_at > 20 * per_ms:
-                end = {"reason": "reset", "cycle": reset_at}
+            reset_taken = next((g["cycle"] for g in self.given if g["input"]["name"] == "reset" and g["cycle"]), None)
+            if reset_at is not None and ((reset_taken and now - reset_taken > 20 * per_ms) or now - reset_at > 1000 * per_ms):
+                end = {"reason": "reset", "cycle": reset_taken or reset_at}
             elif t0 is not None and now - t0 >= limit_cycles:
                 c.abort()
-                end = {"reason": "time_limit", "cycle": t0 + limit_cycles}
+                end = {"reason": "time_limit", "cycle": t0 + limit_cycles, "limit_cycles": limit_cycles}
+            elif now - c_run >= budget_cycles:
+                c.abort()
+                end = {"reason": "over_budget", "cycle": now}
             elif st[2] == linuxcnc.STATE_ESTOP:
                 end = {"reason": "alarm", "cycle": now, "estop": True}
-            elif started and not running:
+            elif started and not running and reset_at is None:
                 end = self.settle({"reason": "program_end", "cycle": now})
             elif st[1]:
                 if req.get("auto_cycle_start"):
@@ -409,7 +422,7 @@ class Run:
             if time.monotonic() - wall0 > wall_limit:
                 end = {"reason": "time_limit", "cycle": now, "wall": True}
             time.sleep(0.0003)
-        if end["reason"] in ("stopped", "time_limit", "alarm"):
+        if end["reason"] in ("stopped", "time_limit", "alarm", "over_budget"):
             c.abort()
         return self.finish(out, sampler, {"end": end, "t0": t0, "c_run": c_run})
 
@@ -477,7 +490,7 @@ def main():
         try:
             clock.period_s = req["cfg"]["period_us"] / 1e6
             msgs = []
-            prepare(msgs, clock)
+            prepare(msgs, clock, req["cfg"].get("path_mode", "G64"))
             res = Run(req, clock).run()
             res["prepare_messages"] = msgs
             answer(res)

@@ -94,9 +94,10 @@ def num(x):
     return s if s not in ("", "-0") else "0"
 
 
-def machine_config(params):
+def machine_config(params, path_mode="G64"):
     """(ini_text, hal_text, cfg) for the parameters; cfg holds what the agent and the trace need
-    (servo period, override limits, zero-speed time). Raises NotApplicable."""
+    (servo period, override limits, zero-speed time, the power-on path mode). Raises NotApplicable.
+    `path_mode`: LinuxCNC's default G64 (blending), or G61 (exact stop) to see what blending costs."""
     v = resolve(params)
     period_us = int(v["nc.period_us"])
     if period_us not in (1000, 2000, 4000, 8000):
@@ -131,6 +132,7 @@ def machine_config(params):
         "spindle_override_min": v["nc.spindle_override_min_pct"] / 100.0,
         "spindle_override_max": v["nc.spindle_override_max_pct"] / 100.0,
         "zsp_ms": v["plc.zsp_ms"],
+        "path_mode": path_mode,
     }
     ini = [
         "# Written by examples/linuxcnc-adapter for one scenario's linuxcnc parameters.",
@@ -143,7 +145,7 @@ def machine_config(params):
         "PROGRAM_PREFIX = .", "",
         "[TASK]", "TASK = milltask", "CYCLE_TIME = 0.001", "",
         "[RS274NGC]", "PARAMETER_FILE = machine.var",
-        "RS274NGC_STARTUP_CODE = G17 G21 G40 G49 G54 G80 G90 G94 G99 G8 G64", "",
+        f"RS274NGC_STARTUP_CODE = G17 G21 G40 G49 G54 G80 G90 G94 G99 G8 {path_mode}", "",
         "[EMCMOT]", "EMCMOT = motmod", "COMM_TIMEOUT = 1.0", "BASE_PERIOD = 0",
         f"SERVO_PERIOD = {period_us * 1000}", "",
         # LinuxCNC 2.9 runs the IO controller as its own program (2.10 ignores these two).

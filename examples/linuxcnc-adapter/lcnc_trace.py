@@ -21,7 +21,8 @@ The mapping (examples/linuxcnc-adapter/README.md says it for users):
   program end; M8/M7/M9 from the coolant pins. Each function has its strobe and FIN at the same
   µs: LinuxCNC has no completion handshake (the dialect's `plc.fin_ms` = 0).
 - **signals**: STL (program running, not paused), SPL (paused: feed hold, single-block step, M0),
-  ZSP (spindle commanded off and standing for `plc.zsp_ms`), ESP (LinuxCNC's E-stop state).
+  ZSP (spindle standing for `plc.zsp_ms`, falling with a start command or motion), ESP (LinuxCNC's
+  E-stop state).
 - **blocks**: a line starts when its motion starts (`motion.program-line`), or with the first
   spindle/coolant change it makes; lines without an observable action start with the next one
   that has it.
@@ -180,10 +181,26 @@ class Trace:
         self.levels = {s: 0 for s in SIGNALS}
         self.by_cycle = {r["cycle"]: r for r in rows}
         self.t0 = self.find_t0()
+        self.acted()
         self.next_block = 1
         self.blocks = 0
         self.alarms = 0
         self.stopped_by = None
+
+    def acted(self):
+        """A reset or E-stop acts before LinuxCNC's task reports it taken (its echo comes once the
+        abort is done, up to ~150 ms later): the spindle going off between the command and that
+        report marks when it acted."""
+        for g in self.agent.get("given", []):
+            name = g["input"]["name"]
+            if name not in ("reset", "emergency_stop") or "sent" not in g or not g["input"].get("on", True):
+                continue
+            prev = None
+            for r in self.rows:
+                if g["sent"] < r["cycle"] <= g["cycle"] and prev is not None and prev["on"] and not r["on"]:
+                    g["cycle"] = r["cycle"]
+                    break
+                prev = r
 
     # --- helpers ---
     def find_t0(self):
@@ -294,19 +311,21 @@ class Trace:
             while msgs and msgs[0]["cycle"] <= c:
                 m = msgs.pop(0)
                 line = re.search(r"[Ll]ine (\d+)", m["text"])
-                line = int(line.group(1)) if line else (m.get("read_line") or None)
+                line = int(line.group(1)) if line else None
                 ie = self.agent.get("interp_error")
                 if line is None and ie and ie["message"] == m["text"].strip():
                     line = ie["line"]
                 self.alarm(t, alarm_code(m["text"]), m["text"].strip(), line)
             self.row(prev, r, t)
-            # ZSP: commanded off and standing for plc.zsp_ms
-            if not r["on"] and abs(r["rpm"]) < 1e-9:
+            # ZSP: the spindle standing for plc.zsp_ms (it falls with a start command or motion)
+            if abs(r["rpm"]) < 1e-9 and not (r["on"] and not prev["on"]):
                 zero_since = c if zero_since is None else zero_since
                 if c - zero_since + 1 >= self.zsp_cycles:
                     self.signal(t, "ZSP", 1)
             else:
                 zero_since = None
+                if abs(r["rpm"]) >= 1e-9:
+                    self.signal(t, "ZSP", 0)
             prev = r
         self.finish_program(end_c, reason)
         last = [r for r in rows if r["cycle"] <= end_c] or rows[:1]
@@ -331,7 +350,9 @@ class Trace:
             resets = [g["cycle"] for g in self.agent.get("given", []) if g["input"]["name"] == "reset"]
             return (max(resets[0], self.t0) if resets else end["cycle"]), reason
         if reason == "time_limit":
-            return end["cycle"], reason
+            if end.get("wall") or "limit_cycles" not in end:
+                return end["cycle"], reason
+            return self.t0 + end["limit_cycles"], reason
         if reason == "stopped":
             # held with nothing to release it: the run ends where the hold began
             holds = [st["cycle"] for st in self.agent.get("states", []) if st["paused"]]
