@@ -165,21 +165,24 @@ impl Exec<'_> {
     /// the lowest rapid rate / time constant, a tapping stroke on its rigid tapping profile, any
     /// other motion at the cutting feed's.
     fn stop_rate(&self) -> f64 {
-        match self.motion.as_ref().map(|m| &m.path) {
-            // The lowest rate / time constant of the axes that move (an axis without a rapid rate,
-            // standing still, used to make it 0: a stop at once; found by the campaign, INV-11).
-            Some(Path::Rapid { profiles, .. }) => {
-                let a = (0..crate::trace::AXES)
-                    .filter(|&i| profiles[i].dist > 0.0)
-                    .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
-                    .filter(|a| *a > 0.0)
-                    .fold(f64::INFINITY, f64::min);
-                if a.is_finite() {
-                    a
-                } else {
-                    self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64
-                }
+        let feed = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
+        // The lowest rate / time constant of the axes `moves` names that have a rapid rate (an
+        // axis without one, standing still, used to make it 0: a stop at once; found by the
+        // campaign, INV-11); the cutting acceleration when none has.
+        let rapid = |moves: &dyn Fn(usize) -> bool| {
+            let a = (0..crate::trace::AXES)
+                .filter(|&i| moves(i))
+                .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
+                .filter(|a| *a > 0.0)
+                .fold(f64::INFINITY, f64::min);
+            if a.is_finite() {
+                a
+            } else {
+                feed
             }
+        };
+        match self.motion.as_ref().map(|m| &m.path) {
+            Some(Path::Rapid { profiles, .. }) => rapid(&|i| profiles[i].dist > 0.0),
             // A rigid tapping stroke on its profile; a tap following a spindle in speed mode
             // (G93, G33.1 return) at the spindle's ramp, within the axis' own acceleration.
             Some(Path::Tap { lead, .. }) if self.spindle.position_mode => {
@@ -187,23 +190,14 @@ impl Exec<'_> {
             }
             Some(Path::Tap { lead, .. }) => {
                 let a_rpm = self.cfg.spindle_max_rpm.max(1) as f64 / self.cfg.spindle_ramp_us.max(1) as f64;
-                (a_rpm * lead / 60e6)
-                    .min(self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64)
+                (a_rpm * lead / 60e6).min(feed)
             }
             // A coordinated rapid (LinuxCNC's G0, one straight line, LCNC-MOT-01): the lowest
             // rapid acceleration of the axes that have one.
             Some(Path::Line { .. }) if matches!(self.motion_step, Some(crate::plan::Step::Rapid { .. })) => {
-                let a = (0..crate::trace::AXES)
-                    .map(|i| self.cfg.rapid_nm_min[i] / 60e6 / self.cfg.rapid_ramp_us[i].max(1) as f64)
-                    .filter(|a| *a > 0.0)
-                    .fold(f64::INFINITY, f64::min);
-                if a.is_finite() {
-                    a
-                } else {
-                    self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64
-                }
+                rapid(&|_| true)
             }
-            Some(_) => self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64,
+            Some(_) => feed,
             None => 0.0,
         }
     }
