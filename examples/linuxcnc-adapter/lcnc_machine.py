@@ -14,6 +14,7 @@ Standard library only.
 
 import fcntl
 import json
+import math
 import os
 import pwd
 import shutil
@@ -153,9 +154,12 @@ def machine_config(params, path_mode="G64"):
         "[HAL]", "HALFILE = machine.hal", "",
         "[TRAJ]", "COORDINATES = X Y Z", "LINEAR_UNITS = mm", "ANGULAR_UNITS = degree",
         f"DEFAULT_LINEAR_VELOCITY = {num(max(vel.values()))}",
-        f"MAX_LINEAR_VELOCITY = {num(max(feed_v, max(vel.values())))}",
+        # [TRAJ] caps the vector speed and acceleration of every move, rapids included; the
+        # reference's G0 is limited by its axes only (DEC-140), so the caps sit where the axes
+        # together end (params --from-ini reads the same feed limit: the smallest axis').
+        f"MAX_LINEAR_VELOCITY = {num(max(feed_v, math.hypot(*vel.values())))}",
         f"DEFAULT_LINEAR_ACCELERATION = {num(max(acc.values()))}",
-        f"MAX_LINEAR_ACCELERATION = {num(max(acc.values()))}", "",
+        f"MAX_LINEAR_ACCELERATION = {num(math.hypot(*acc.values()))}", "",
         "[KINS]", "KINEMATICS = trivkins", "JOINTS = 3", "",
         "[SPINDLE_0]", f"MAX_FORWARD_VELOCITY = {num(smax)}", f"MAX_REVERSE_VELOCITY = {num(smax)}", "",
     ]

@@ -395,9 +395,14 @@ class Trace:
             if kind == "g331" and sp != 0 and sr != 0:
                 pass  # the rigid tap's reversals are motion's own
             elif kind and kind.startswith("cycle") and self.cur_is_running(r):
-                if sp != 0:
+                if sp != 0 and sr == 0 and self.program_end_stop():
+                    self.pending_stop = t  # the cycle's own stop, or the program end's (below)
+                elif sp != 0:
                     self.function(t, "M", 5)
                 if sr != 0:
+                    if getattr(self, "pending_stop", None) is not None:
+                        self.function(self.pending_stop, "M", 5)
+                        self.pending_stop = None
                     self.function(t, "M", 3 if sr > 0 else 4)
             else:
                 self.spindle_change(t, sp, sr)
@@ -411,6 +416,12 @@ class Trace:
                     self.block(t, target)
                 self.function(t, "M", code)
         self.phases(p, r, t, kind)
+
+    def program_end_stop(self):
+        """A stop in a cycle with no M5 left in the program but an M2/M30: the cycle's own stop
+        (it reverses through 0) when the spindle starts again, else the program end's stop (a
+        `G80 M2` line moves nothing, so the cycle's line is still current): kept pending."""
+        return self.line_with_m((5,)) is None and self.line_with_m((2, 30)) is not None
 
     def cur_is_running(self, r):
         """Still inside the cycle's line: before the interpreter's next line starts moving."""
@@ -515,6 +526,8 @@ class Trace:
         if reason == "program_end":
             end = self.line_with_m((2, 30))
             if end is not None:
+                if getattr(self, "pending_stop", None) is not None:
+                    t = self.pending_stop  # M2/M30 stopped the spindle: the end acted there
                 self.block(t, end)
                 self.function(t, "M", [m for m in self.prog.m[end] if m in (2, 30)][0])
             else:

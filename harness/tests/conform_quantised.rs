@@ -72,11 +72,22 @@ fn run_all(ctl: &mut Noisy, under: &str) -> (usize, Vec<String>) {
         let name = p.strip_prefix(root()).unwrap().display().to_string();
         let v = run_one(ctl, &dialects, &p, &name).unwrap();
         n += 1;
-        if v.status == Status::Failed {
+        // The reference itself fails the expectations `reference_open.txt` lists (a ratchet in
+        // tests/scenarios.rs): they say nothing about quantisation.
+        if v.status == Status::Failed && !reference_open().iter().any(|o| *o == name) {
             failed.push(format!("{name}\n{}", v.failure_text()));
         }
     }
     (n, failed)
+}
+
+/// The scenarios `reference_open.txt` lists (path, then rule ids).
+fn reference_open() -> Vec<&'static str> {
+    include_str!("reference_open.txt")
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .filter_map(|l| l.split_whitespace().next())
+        .collect()
 }
 
 #[test]
@@ -92,4 +103,35 @@ fn a_controller_off_by_more_than_the_tolerance_still_fails() {
     let mut ctl = Noisy { inner: Reference::new(), rng: 0, offset_nm: 60_000 };
     let (n, failed) = run_all(&mut ctl, "gsk/peck");
     assert_eq!(failed.len(), n, "every peck scenario fails with every axis 0.06 mm off");
+}
+
+/// `conform --tolerances FILE`: the machine's own tolerances replace the defaults for every
+/// scenario without a `.check.yaml`. The same controller, 0.06 mm off on every axis, fails every
+/// peck scenario at the defaults (above) and passes them at 0.1 mm; the command line reads the
+/// file (a bad one is an input error naming it).
+#[test]
+fn the_machine_tolerances_replace_the_defaults() {
+    use nc_conform::check::Tolerances;
+    use nc_conform::conform::suite::run_one_within;
+    let machine = Tolerances { position_mm: 0.1, keypoint_mm: 0.1, ..Tolerances::default() };
+    let mut ctl = Noisy { inner: Reference::new(), rng: 0, offset_nm: 60_000 };
+    let dialects = ctl.identity().unwrap().dialects;
+    let files = scenario_files(&root().join("scenarios/gsk/peck"));
+    assert!(files.len() > 2);
+    for p in files {
+        let name = p.strip_prefix(root()).unwrap().display().to_string();
+        let v = run_one_within(&mut ctl, &dialects, &p, &name, &machine).unwrap();
+        assert_eq!(v.status, Status::Passed, "{name}\n{}", v.failure_text());
+    }
+    let bad = std::env::temp_dir().join(format!("nc-conform-bad-tol-{}.yaml", std::process::id()));
+    std::fs::write(&bad, "event_ms: soon\n").unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nc-conform"))
+        .current_dir(root())
+        .args(["conform", "--adapter", "true", "--tolerances", bad.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stderr).to_string();
+    let _ = std::fs::remove_file(&bad);
+    assert_eq!(o.status.code(), Some(2), "{text}");
+    assert!(text.contains("nc-conform-bad-tol-"), "the file is named: {text}");
 }

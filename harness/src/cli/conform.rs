@@ -14,7 +14,7 @@ use clap::Args;
 
 use super::{display_name, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::conform::process::{split_command, ProcessController};
-use crate::conform::suite::{run_one, scenario_files, SuiteReport};
+use crate::conform::suite::{run_one_within, scenario_files, SuiteReport};
 use crate::conform::verdict::Status;
 use crate::conform::Controller;
 use crate::diag::InputError;
@@ -42,6 +42,12 @@ pub struct ConformArgs {
     /// scenario fails and the adapter is restarted for the next one.
     #[arg(long, value_name = "N", default_value_t = 600_000)]
     pub scenario_timeout_ms: u64,
+
+    /// The machine's tolerances (the `check --tolerances` file format, docs/checking.md) for
+    /// every scenario without a `.check.yaml` of its own, instead of the defaults: a real
+    /// controller's task and PLC cycles are not the reference's.
+    #[arg(long, value_name = "FILE.yaml")]
+    pub tolerances: Option<PathBuf>,
 
     /// Write the verdicts as JUnit XML (one test case per scenario).
     #[arg(long, value_name = "FILE.xml")]
@@ -82,6 +88,10 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
         e.expected = Some(".yaml files under the directory (and a --filter that matches some)".into());
         return Err(e);
     }
+    let machine = match &args.tolerances {
+        Some(p) => crate::input::load_tolerances(p)?,
+        None => crate::check::Tolerances::default(),
+    };
     let mut ctl = ProcessController::new(argv, Duration::from_millis(args.timeout_ms.max(1)))
         .with_scenario_limit(Duration::from_millis(args.scenario_timeout_ms.max(1)));
     let id = ctl
@@ -90,7 +100,7 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
     println!("{} {} (dialects: {})", id.name, id.version, id.dialects.join(", "));
     let mut report = SuiteReport::new(&id);
     for (path, name) in &files {
-        let v = run_one(&mut ctl, &id.dialects, path, name)?;
+        let v = run_one_within(&mut ctl, &id.dialects, path, name, &machine)?;
         let tag = match v.status {
             Status::Passed => "ok  ",
             Status::Failed => "FAIL",

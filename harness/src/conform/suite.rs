@@ -54,6 +54,18 @@ pub fn run_one(
     path: &Path,
     name: &str,
 ) -> Result<ScenarioVerdict, InputError> {
+    run_one_within(ctl, dialects, path, name, &Tolerances::default())
+}
+
+/// [`run_one`] with the machine's own tolerances (`conform --tolerances FILE`) in place of the
+/// defaults; a scenario's own `.check.yaml` still wins, being the scenario's statement.
+pub fn run_one_within(
+    ctl: &mut dyn Controller,
+    dialects: &[String],
+    path: &Path,
+    name: &str,
+    machine: &Tolerances,
+) -> Result<ScenarioVerdict, InputError> {
     let started = std::time::Instant::now();
     let s = load::load(path, name)?;
     let dialect = s.machine.dialect.name();
@@ -70,8 +82,7 @@ pub fn run_one(
         });
     }
     let side = path.with_extension("check.yaml");
-    let tolerances =
-        if side.is_file() { crate::input::load_tolerances(&side)? } else { Tolerances::default() };
+    let tolerances = if side.is_file() { crate::input::load_tolerances(&side)? } else { machine.clone() };
     let program = match &s.refusal {
         Some((_, _, text)) => text.clone(),
         None => drive::program_text(path, name)?,
