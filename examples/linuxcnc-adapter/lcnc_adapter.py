@@ -123,7 +123,7 @@ class Adapter:
         if req.get("dialect") != "linuxcnc":
             return {"ok": False, "unsupported": f"LinuxCNC does not run {req.get('dialect')}"}
         try:
-            ini, hal, cfg = lcnc_machine.machine_config(req.get("params", []), self.args.path_mode)
+            ini, hal, cfg = lcnc_machine.machine_config(req.get("params", []), self.args.path_mode, self.args.planner)
         except lcnc_machine.NotApplicable as e:
             return {"ok": False, "unsupported": f"not applicable: {e}"}
         self.ensure_instance(ini, hal)
@@ -412,8 +412,13 @@ def main():
     ap.add_argument("--max-run-s", type=float, default=float(os.environ.get("LCNC_MAX_RUN_S", 120)),
                     help="stop a LinuxCNC run after this much machine time (default 120 s); a scenario "
                          "that needs longer is not applicable")
-    ap.add_argument("--path-mode", choices=["G64", "G61"], default="G64",
-                    help="power-on path mode: LinuxCNC's default G64 (blending), or G61 (exact stop)")
+    ap.add_argument("--path-mode", choices=["G64", "G61", "G61.1"], default="G64",
+                    help="power-on path mode: LinuxCNC's default G64 (blending), G61 (exact path) or "
+                         "G61.1 (exact stop)")
+    ap.add_argument("--planner", choices=["default", "exact"], default="default",
+                    help="LinuxCNC's planner look-ahead: its default, or `exact` "
+                         "([TRAJ] ARC_BLEND_OPTIMIZATION_DEPTH = 1: no tangent joins of colinear "
+                         "moves, no 10 %% acceleration cut at corners, in G61 and in canned cycles)")
     ap.add_argument("--keep", default=os.environ.get("LCNC_ADAPTER_KEEP"),
                     help="keep every run's recording, agent log and trace in this folder")
     Adapter(ap.parse_args()).serve()

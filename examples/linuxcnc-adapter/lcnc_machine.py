@@ -95,10 +95,15 @@ def num(x):
     return s if s not in ("", "-0") else "0"
 
 
-def machine_config(params, path_mode="G64"):
+def machine_config(params, path_mode="G64", planner="default"):
     """(ini_text, hal_text, cfg) for the parameters; cfg holds what the agent and the trace need
     (servo period, override limits, zero-speed time, the power-on path mode). Raises NotApplicable.
-    `path_mode`: LinuxCNC's default G64 (blending), or G61 (exact stop) to see what blending costs."""
+    `path_mode`: LinuxCNC's default G64 (blending), G61 (exact path) or G61.1 (exact stop).
+    `planner`: "default", or "exact": LinuxCNC's planner joins colinear moves without a stop and
+    cuts the acceleration of moves meeting at a corner by [TRAJ] ARC_BLEND_KINK_RATIO (0.1) in
+    exact path mode too, and canned cycles run in exact path whatever the mode (rs274 -g:
+    SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH) around a cycle; tp.c tpSetupTangent). A look-ahead
+    depth below 2 turns that off: every corner is an exact stop at full acceleration."""
     v = resolve(params)
     period_us = int(v["nc.period_us"])
     if period_us not in (1000, 2000, 4000, 8000):
@@ -134,6 +139,7 @@ def machine_config(params, path_mode="G64"):
         "spindle_override_max": v["nc.spindle_override_max_pct"] / 100.0,
         "zsp_ms": v["plc.zsp_ms"],
         "path_mode": path_mode,
+        "planner": planner,
     }
     ini = [
         "# Written by examples/linuxcnc-adapter for one scenario's linuxcnc parameters.",
@@ -159,7 +165,8 @@ def machine_config(params, path_mode="G64"):
         # together end (params --from-ini reads the same feed limit: the smallest axis').
         f"MAX_LINEAR_VELOCITY = {num(max(feed_v, math.hypot(*vel.values())))}",
         f"DEFAULT_LINEAR_ACCELERATION = {num(max(acc.values()))}",
-        f"MAX_LINEAR_ACCELERATION = {num(math.hypot(*acc.values()))}", "",
+        f"MAX_LINEAR_ACCELERATION = {num(math.hypot(*acc.values()))}",
+        *(["ARC_BLEND_OPTIMIZATION_DEPTH = 1"] if planner == "exact" else []), "",
         "[KINS]", "KINEMATICS = trivkins", "JOINTS = 3", "",
         "[SPINDLE_0]", f"MAX_FORWARD_VELOCITY = {num(smax)}", f"MAX_REVERSE_VELOCITY = {num(smax)}", "",
     ]
