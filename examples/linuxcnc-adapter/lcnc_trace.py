@@ -289,9 +289,11 @@ class Trace:
                 tg = self.t(max(g["cycle"], self.t0))
                 if not g.get("auto"):
                     self.emit(tg, {"kind": "input", "name": g["input"]["name"], "value": input_value(g["input"])})
-                if g["input"]["name"] == "cycle_start" and self.levels["SPL"]:
-                    self.signal(tg, "SPL", 0)
-                    self.signal(tg, "STL", 1)
+                if g["input"]["name"] == "cycle_start":
+                    self.pause_pending = False
+                    if self.levels["SPL"]:
+                        self.signal(tg, "SPL", 0)
+                        self.signal(tg, "STL", 1)
                 if g["input"]["name"] in ("reset", "emergency_stop"):
                     self.stopped_by = g["input"]["name"]
                     if g["input"].get("on"):
@@ -300,8 +302,14 @@ class Trace:
             while states and states[0]["cycle"] <= c:
                 st = states.pop(0)
                 if st["interp"] != 1 or st["paused"]:
-                    self.signal(t, "SPL", 1 if st["paused"] else 0)
-                    self.signal(t, "STL", 0 if st["paused"] else 1)
+                    if st["paused"]:
+                        # paused from here; SPL once the axes are at rest (below), as the
+                        # reference reports a hold where it took effect
+                        self.pause_pending = True
+                    else:
+                        self.pause_pending = False
+                        self.signal(t, "SPL", 0)
+                        self.signal(t, "STL", 1)
                     if st["paused"]:
                         stop = self.line_with_m((0, 1, 60))
                         if stop is not None and self.next_block <= stop:
@@ -317,6 +325,10 @@ class Trace:
                     line = ie["line"]
                 self.alarm(t, alarm_code(m["text"]), m["text"].strip(), line)
             self.row(prev, r, t)
+            if getattr(self, "pause_pending", False) and not any(abs(r[a] - prev[a]) > 1e-9 for a in "XYZ"):
+                self.pause_pending = False
+                self.signal(t, "SPL", 1)
+                self.signal(t, "STL", 0)
             # ZSP: the spindle standing for plc.zsp_ms (it falls with a start command or motion)
             if abs(r["rpm"]) < 1e-9 and not (r["on"] and not prev["on"]):
                 zero_since = c if zero_since is None else zero_since
@@ -522,6 +534,10 @@ class Trace:
     def finish_program(self, end_c, reason):
         """At the end: the cycle left, the program end's block and M2/M30 when LinuxCNC reached it."""
         t = self.t(end_c)
+        if getattr(self, "pause_pending", False):
+            self.pause_pending = False
+            self.signal(t, "SPL", 1)
+            self.signal(t, "STL", 0)
         if getattr(self, "ended", False):
             return
         if self.cur is not None and self.prog.kind.get(self.cur):
