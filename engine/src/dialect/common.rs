@@ -42,6 +42,7 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         tool_change_us: 0,
         coordinated_rapid: false,
         feed_waits_at_speed: false,
+        spindle_override_at_once: false,
         plc: PlcConfig {
             fin_us: ms("plc.fin_ms"),
             fin_fall_us: ms("plc.fin_fall_ms"),

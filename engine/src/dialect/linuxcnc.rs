@@ -72,10 +72,12 @@ impl Dialect for Linuxcnc {
     }
     fn plant_config(&self, p: &Params) -> PlantConfig {
         // LinuxCNC's motion controller: G0 is one coordinated line (LCNC-MOD-02) and a cutting
-        // move after M3/M4 waits for the spindle at speed (LCNC-MOT-01).
+        // move after M3/M4 waits for the spindle at speed (LCNC-MOT-01); a spindle override acts on
+        // the turning spindle at once (LCNC-G331-04, LCNC-G76-04).
         let mut c = super::common::plant_config(p, "nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm");
         c.coordinated_rapid = true;
         c.feed_waits_at_speed = true;
+        c.spindle_override_at_once = true;
         c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {

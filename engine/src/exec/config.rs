@@ -70,9 +70,14 @@ pub struct PlantConfig {
     /// trajectory planner). False: each axis rapids at its own rate and ends on its own.
     pub coordinated_rapid: bool,
     /// A spindle start (M3/M4) makes the next cutting move (line or arc, not a rapid) wait until
-    /// the spindle has reached its commanded speed (LinuxCNC's motion controller:
-    /// `atspeed_next_feed`, `spindle.0.at-speed`).
+    /// the spindle is at speed (LinuxCNC's motion controller: `atspeed_next_feed`,
+    /// `spindle.0.at-speed`): the executor puts a `Step::AwaitAtSpeed` in front of it (DEC-143).
     pub feed_waits_at_speed: bool,
+    /// A spindle override acts on the turning spindle at once (speed mode, unless the program
+    /// holds the overrides), and the moves that follow the spindle follow it (LinuxCNC: motion
+    /// scales the commanded speed in every servo period). False: it acts from the next speed
+    /// command (COM-MOT-06).
+    pub spindle_override_at_once: bool,
     /// The PLC ladder.
     pub plc: PlcConfig,
     /// The override switches' ranges and steps.

@@ -14,7 +14,7 @@ impl Exec<'_> {
     pub(super) fn css_speed(&self, css: &Css, x: Nm) -> f64 {
         let max = self.cfg.spindle_max_rpm;
         let limit = if css.limit_rpm > 0 { css.limit_rpm.min(max) } else { max } as f64;
-        let ovr = if self.override_locked { 100 } else { self.spindle_override };
+        let ovr = self.spindle_ovr();
         (css.rpm(x, max) * ovr as f64 / 100.0).min(limit)
     }
 

@@ -18,6 +18,7 @@ impl Exec<'_> {
     /// Starts a following motion.
     pub(super) fn start_follow(&mut self, f: Follow) {
         let now = self.now;
+        self.follow_step = Some((now, f));
         let d = f.target - self.cmd[f.axis];
         let lead = f.lead_nm.max(1) as f64;
         let period = self.cfg.period_us;

@@ -102,7 +102,10 @@ impl Exec<'_> {
             Input::MachineLock(b) => self.machine_lock = b,
             Input::OptionalStop(b) => self.optional_stop = b,
             Input::FeedOverride(p) => self.feed_override = self.cfg.overrides.feed(p),
-            Input::SpindleOverride(p) => self.spindle_override = self.cfg.overrides.spindle(p),
+            Input::SpindleOverride(p) => {
+                self.spindle_override = self.cfg.overrides.spindle(p);
+                self.spindle_override_changed();
+            }
             Input::EmergencyStop(true) => {
                 self.set_signal(Signal::Esp, true);
                 self.stop_motion_now();

@@ -13,6 +13,7 @@ mod inputs;
 pub mod motion;
 mod plc;
 pub mod profile;
+mod resync;
 pub mod spindle;
 mod steps;
 mod thread;
@@ -49,6 +50,9 @@ enum Active {
     Await { signal: Signal, value: bool, then: AfterAwait },
     /// Stopped until cycle start (feed hold, single block, M00).
     Held,
+    /// Until the spindle is at speed (`Step::AwaitAtSpeed`): its speed change has ended and it
+    /// is not stalled; a stalled spindle is never at speed, and the wait lasts.
+    AtSpeed,
 }
 
 /// What to do once an awaited signal arrives.
@@ -130,6 +134,8 @@ pub(crate) struct Exec<'a> {
     css: Option<Css>,
     /// The present motion follows the spindle's encoder in speed mode (`Step::Follow`).
     following: bool,
+    /// The `Step::Follow` that started a motion, with that motion's start time (`resync`).
+    follow_step: Option<(Micros, crate::plan::Follow)>,
     /// A braking coast cut short at the allowance (NC-1050): when it ends (µs), the spindle's
     /// speed then (signed rpm) and its braking deceleration (rpm/µs).
     coast: Option<(Micros, f64, f64)>,
@@ -137,7 +143,7 @@ pub(crate) struct Exec<'a> {
     /// machine lock, for the brake after it.
     follow_v: Option<(f64, bool)>,
     /// A spindle start has been commanded since the last cutting move: the next one waits for the
-    /// spindle at speed (`PlantConfig::feed_waits_at_speed`).
+    /// spindle at speed (`PlantConfig::feed_waits_at_speed`), through `Step::AwaitAtSpeed`.
     atspeed_next_feed: bool,
 }
 
@@ -218,6 +224,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         await_no: 0,
         css: None,
         following: false,
+        follow_step: None,
         coast: None,
         follow_v: None,
         atspeed_next_feed: false,
@@ -242,7 +249,10 @@ impl Exec<'_> {
             }
             let t = self.next_event_time();
             if t == Micros::MAX || t > self.opts.time_limit_us {
-                let reason = if self.active == Active::Held || t == Micros::MAX {
+                // A control waiting for a stalled spindle to be at speed still waits (LinuxCNC:
+                // the feed never starts): the run ends at its time limit, not as stopped.
+                let waiting = self.active == Active::AtSpeed;
+                let reason = if self.active == Active::Held || (t == Micros::MAX && !waiting) {
                     EndReason::Stopped
                 } else {
                     EndReason::TimeLimit
@@ -272,6 +282,9 @@ impl Exec<'_> {
                 }
             }
             Active::Until(u) => t = t.min(*u),
+            Active::AtSpeed if !self.spindle.stalled => {
+                t = t.min(ceil_to(self.spindle.ramp_end().max(self.now), self.cfg.period_us.max(1)));
+            }
             _ => {}
         }
         if let Some(p) = self.plc.next_time() {
@@ -343,8 +356,19 @@ impl Exec<'_> {
                 self.active = Active::Idle;
             }
             Active::Until(u) if u <= t => self.active = Active::Idle,
+            Active::AtSpeed if self.spindle_at_speed(t) => {
+                // The control sees at-speed on its next tick.
+                let tick = ceil_to(t, self.cfg.period_us.max(1));
+                self.active = if tick > t { Active::Until(tick) } else { Active::Idle };
+            }
             _ => {}
         }
+    }
+
+    /// The spindle is at speed (LinuxCNC's `spindle.0.at-speed`): not stalled and no speed change
+    /// under way.
+    fn spindle_at_speed(&self, t: Micros) -> bool {
+        !self.spindle.stalled && self.spindle.ramp(t).is_none()
     }
 
     /// Checks an awaited signal after a PLC edge; the CNC notices it at its next tick.

@@ -88,15 +88,13 @@ impl Exec<'_> {
             self.active = Active::Until(next);
             return;
         }
-        // LinuxCNC: the first cutting move after a spindle start waits for the spindle at speed.
+        // LinuxCNC: the first cutting move after a spindle start waits for the spindle at speed,
+        // the same wait as before a synchronised move (`Step::AwaitAtSpeed`).
         if self.atspeed_next_feed && matches!(step, Step::Feed { .. } | Step::Arc { .. }) {
             self.atspeed_next_feed = false;
-            if self.spindle.ramp(now).is_some() && !self.spindle.stalled {
-                let ready = ceil_to(self.spindle.ramp_end().max(now + 1), self.cfg.period_us);
-                self.steps.push_front(step);
-                self.active = Active::Until(ready);
-                return;
-            }
+            self.steps.push_front(step);
+            self.steps.push_front(Step::AwaitAtSpeed);
+            return;
         }
         match step {
             Step::Phase(p) => self.set_phase(p),
@@ -198,11 +196,13 @@ impl Exec<'_> {
                     self.hold_requested = true;
                 }
             }
-            Step::OverrideLock(b) => self.override_locked = b,
+            Step::OverrideLock(b) => {
+                self.override_locked = b;
+                self.spindle_override_changed();
+            }
             Step::AwaitAtSpeed => {
-                if self.spindle.ramp(now).is_some() {
-                    let end = self.spindle.ramp_end().max(now + 1);
-                    self.active = Active::Until(ceil_to(end, self.cfg.period_us));
+                if !self.spindle_at_speed(now) {
+                    self.active = Active::AtSpeed;
                 }
             }
             Step::Css(c) => self.css_set(c),
@@ -500,7 +500,7 @@ impl Exec<'_> {
             _ => Signal::Mf,
         };
         let max = self.cfg.spindle_max_rpm as f64;
-        let spindle_ovr = if self.override_locked { 100 } else { self.spindle_override };
+        let spindle_ovr = self.spindle_ovr();
         let speed = match self.css {
             Some(css) => self.css_speed(&css, self.cmd[0]),
             None => (self.s_cmd as f64 * spindle_ovr as f64 / 100.0).min(max),

@@ -310,9 +310,11 @@ pub enum Step {
     /// Feed and spindle overrides held at 100 % (true) or honoured again (false), feed hold
     /// still honoured (LinuxCNC `DISABLE_FEED_OVERRIDE` / `DISABLE_SPEED_OVERRIDE` in G84/G74).
     OverrideLock(bool),
-    /// Waits until the spindle has reached its commanded speed (a speed change under way has
-    /// ended); goes on at once when it has (LinuxCNC's spindle at-speed before a spindle-
-    /// synchronised move: G33, G33.1).
+    /// Waits until the spindle is at speed: its speed change under way has ended and it is not
+    /// stalled (a stalled spindle never is: the wait lasts); goes on at once when it is. The one
+    /// at-speed wait (DEC-143): LinuxCNC's before a spindle-synchronised move (G33, G33.1, each
+    /// G76 pass), and the executor's own before the first cutting move after a spindle start
+    /// (`PlantConfig::feed_waits_at_speed`).
     AwaitAtSpeed,
 }
 

@@ -127,6 +127,9 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
         end = at(taper_x, end_z);
     }
     push(knot(end[c.x_axis], end_z));
+    // Each pass is a synchronised move that is not yet synchronised: LinuxCNC's planner starts
+    // it once the spindle is at speed (tp.c `needs_atspeed`, LCNC-MOT-01).
+    out.push(Step::AwaitAtSpeed);
     out.push(Step::HoldSuppress(true));
     out.push(Step::Phase(Phase::Cutting));
     if n >= 2 && knots[0].0 != knots[n - 1].0 {

@@ -39,12 +39,28 @@ impl Profile {
         a: f64,
         period: Micros,
     ) -> Option<Profile> {
+        Profile::following_from(dist, 0.0, per_rpm, ramp, vmax, a, period)
+    }
+
+    /// [`Profile::following`] from the speed `v0` (nm/µs) instead of rest: the rest of a move
+    /// whose spindle has just been commanded another speed (LinuxCNC's spindle override in a
+    /// thread pass, LCNC-G76-04). From a speed it ends on its µs, not stretched to whole periods
+    /// (stretching would change the speed it starts with).
+    pub fn following_from(
+        dist: f64,
+        v0: f64,
+        per_rpm: f64,
+        ramp: Ramp,
+        vmax: f64,
+        a: f64,
+        period: Micros,
+    ) -> Option<Profile> {
         if dist <= 0.0 {
             return Some(Profile::still());
         }
         let a = if a > 0.0 && a.is_finite() { a } else { 1e12 };
         let cmd = command(per_rpm, ramp, vmax);
-        let mut pieces = follow(&cmd, a);
+        let mut pieces = follow(&cmd, a, v0);
         // Where the deceleration must begin: the distance run plus the braking distance reaches
         // `dist` (non-decreasing in time, since the path never decelerates faster than `a`).
         let g = |p: &Piece, dt: f64| {
@@ -90,6 +106,12 @@ impl Profile {
         if ideal <= 0.0 || pieces.len() > MAX_PIECES {
             return None;
         }
+        if v0 > 0.0 {
+            let mut out = [NO_PIECE; MAX_PIECES];
+            out[..pieces.len()].copy_from_slice(&pieces);
+            let total = (ideal.ceil() as Micros).max(1);
+            return Some(Profile { pieces: out, n: pieces.len(), dist, total });
+        }
         // Whole periods: the profile slowed evenly, as a trapezoid is (COM-TIME-02).
         let total = ceil_to((ideal.ceil() as Micros).max(1), period.max(1));
         let f = total as f64 / ideal;
@@ -116,11 +138,25 @@ impl Profile {
         vmax: f64,
         a: f64,
     ) -> Option<(Profile, f64)> {
+        Profile::following_through_from(dist, 0.0, per_rpm, ramp, vmax, a)
+    }
+
+    /// [`Profile::following_through`] from the speed `v0` (nm/µs) instead of rest: the rest of a
+    /// following move whose spindle has just been commanded another speed (LinuxCNC's spindle
+    /// override, LCNC-G331-04).
+    pub fn following_through_from(
+        dist: f64,
+        v0: f64,
+        per_rpm: f64,
+        ramp: Ramp,
+        vmax: f64,
+        a: f64,
+    ) -> Option<(Profile, f64)> {
         if dist <= 0.0 {
             return Some((Profile::still(), 0.0));
         }
         let a = if a > 0.0 && a.is_finite() { a } else { 1e12 };
-        let pieces = follow(&command(per_rpm, ramp, vmax), a);
+        let pieces = follow(&command(per_rpm, ramp, vmax), a, v0);
         for (k, p) in pieces.iter().enumerate() {
             let len = pieces.get(k + 1).map_or(f64::INFINITY, |q| q.t0 - p.t0);
             let s_at = |dt: f64| p.s0 + p.v0 * dt + 0.5 * p.a * dt * dt;
@@ -194,11 +230,11 @@ fn command(per_rpm: f64, r: Ramp, vmax: f64) -> Vec<Cmd> {
     out
 }
 
-/// The path speed from rest following `cmd` within the acceleration `a`: pieces of constant
+/// The path speed from `u0` following `cmd` within the acceleration `a`: pieces of constant
 /// acceleration, the last one of constant speed.
-fn follow(cmd: &[Cmd], a: f64) -> Vec<Piece> {
+fn follow(cmd: &[Cmd], a: f64, u0: f64) -> Vec<Piece> {
     let mut out: Vec<Piece> = Vec::new();
-    let (mut t, mut s, mut u) = (0.0_f64, 0.0_f64, 0.0_f64);
+    let (mut t, mut s, mut u) = (0.0_f64, 0.0_f64, u0.max(0.0));
     for (i, c) in cmd.iter().enumerate() {
         let end = cmd.get(i + 1).map_or(f64::INFINITY, |n| n.t);
         let at = |t: f64| c.v + c.slope * (t - c.t);
