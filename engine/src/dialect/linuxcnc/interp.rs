@@ -64,7 +64,16 @@ pub struct LcncInterp {
     program: Vec<Line>,
     /// The value of the `return` / `endsub` that ended the present call.
     returned: Option<f64>,
+    /// The parameters, for the read-ahead's own interpreter.
+    params: Params,
+    /// An error LinuxCNC's read-ahead finds before the program runs (LCNC-LEX-05): raised by the
+    /// first block, before anything moves.
+    refused: Option<Alarm>,
 }
+
+/// Most steps LinuxCNC's task interprets ahead of motion (its interpreter list,
+/// `EMC_TASK_INTERP_MAX_LEN`, holds 1000 canonical commands; one step here stands for one).
+const READ_AHEAD_MAX: usize = 1000;
 
 impl LcncInterp {
     /// Power-on state.
@@ -79,6 +88,39 @@ impl LcncInterp {
             budget: 0,
             program: Vec::new(),
             returned: None,
+            params: p.clone(),
+            refused: None,
+        }
+    }
+
+    /// LinuxCNC's task interprets the program ahead of motion, up to a queue buster (M0, M1,
+    /// M60, the program end) or a full interpreter list: an execute-phase error found there
+    /// aborts the program before any of it runs (LCNC-LEX-05, DEC-145; emctaskmain.cc
+    /// readahead_reading: interp_list.clear() and emcAbortCleanup on an execute error; through
+    /// the adapter: no M3, no move before the refusal). A copy of the interpreter reads ahead.
+    fn read_ahead(&mut self, program: &crate::parse::Program) {
+        let mut ahead = LcncInterp::new(&self.params);
+        ahead.program = self.program.clone();
+        let mut queued = 0;
+        let mut out = Vec::new();
+        for b in &program.blocks {
+            out.clear();
+            if let Err(a) = ahead.block(b, &mut out) {
+                // Only an error of LinuxCNC's execute phase (converting a canned cycle, a spindle
+                // that is not turning) aborts the read-ahead; an error of its read phase (a word
+                // missing or misplaced, the file's end) stops the reading and the lines before
+                // run (through the adapter: G76 without J, G33 without K, a file without M2).
+                // NC-1098 is this project's bound on a runaway block, not LinuxCNC's error.
+                if ahead.m.cycle_error || a.kind == AlarmKind::LcncSpindle {
+                    self.refused = Some(a);
+                }
+                return;
+            }
+            queued += out.len();
+            let busts = out.iter().any(|s| matches!(s, Step::Stop { .. } | Step::End));
+            if ahead.m.ended || busts || queued >= READ_AHEAD_MAX {
+                return;
+            }
         }
     }
 
@@ -398,6 +440,9 @@ impl LcncInterp {
 
 impl Interpreter for LcncInterp {
     fn block(&mut self, block: &Block, out: &mut Vec<Step>) -> Result<(), Alarm> {
+        if let Some(a) = self.refused.take() {
+            return Err(a);
+        }
         self.budget = 0;
         if block.text == END_OF_FILE {
             return Err(Self::err(block.line, "File ended with no percent sign or program end"));
@@ -469,6 +514,7 @@ impl Interpreter for LcncInterp {
             .filter(|b| b.text != END_OF_FILE)
             .filter_map(|b| parse_line(&b.text, b.line).ok())
             .collect();
+        self.read_ahead(program);
     }
 }
 

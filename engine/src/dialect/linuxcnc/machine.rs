@@ -172,6 +172,9 @@ pub struct Machine {
     /// G41/G42 in force (zero tool radius: paths unchanged).
     pub comp: bool,
     /// M2/M30 seen.
+    /// The last error came from converting a canned cycle (LinuxCNC's execute phase: its task
+    /// aborts the whole read-ahead, LCNC-LEX-05).
+    pub cycle_error: bool,
     pub ended: bool,
 }
 
@@ -201,6 +204,7 @@ impl Machine {
             cyc: CycleMemo::default(),
             comp: false,
             ended: false,
+            cycle_error: false,
         }
     }
 
@@ -539,7 +543,11 @@ impl Machine {
             330 => self.g33(b, out)?,
             331 => self.g33_1(b, out)?,
             760 => self.g76(b, out)?,
-            _ => cycles::canned(self, motion, b, out)?,
+            _ => {
+                let r = cycles::canned(self, motion, b, out);
+                self.cycle_error = r.is_err();
+                r?
+            }
         }
         self.motion = Some(motion);
         Ok(())
