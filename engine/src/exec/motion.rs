@@ -288,8 +288,8 @@ pub fn across_at(knots: &[(f64, f64)], blend: &[f64; 4], s: f64) -> f64 {
 
 /// The blends of [`across_at`] for knots (drive travel, infeed) at drive speed up to `v` nm/µs
 /// and infeed acceleration `a` nm/µs²: at each inner knot the half width over which the slope
-/// change `dm` keeps the infeed axis within `a` (`|dm|·v² / 2a`). The thread proper (the longest
-/// segment) is never rounded: a knot that ends it (a run-out's start, seed 002 "在距离螺纹切削终点
+/// change `dm` keeps the infeed axis within `a` (`|dm|·v² / 2a`). The thread proper (segment
+/// `main`) is never rounded: a knot that ends it (a run-out's start, seed 002 "在距离螺纹切削终点
 /// 固定长度…处 … X 轴沿退刀方向…加速退出") or begins it (the end of an entry taper) moves off it by
 /// the half width along the thread's line, so that the blend starts (or ends) exactly at the knot.
 /// Other inner knots are rounded on both sides. The first and last knots are never rounded (the
@@ -299,16 +299,14 @@ pub fn across_at(knots: &[(f64, f64)], blend: &[f64; 4], s: f64) -> f64 {
 /// moves on into the overrun, and a run-out that ends the pass (G92.3) is cut short (the infeed
 /// axis reaches less far; the retract that follows takes it out). Returns the knots to
 /// interpolate and the blends.
-pub fn blended(knots: &[(f64, f64)], v: f64, a: f64) -> ([(f64, f64); 4], [f64; 4]) {
+pub fn blended(knots: &[(f64, f64)], main: usize, v: f64, a: f64) -> ([(f64, f64); 4], [f64; 4]) {
     let n = knots.len().min(4);
     let mut base = [(0.0, 0.0); 4];
     base[..n].copy_from_slice(&knots[..n]);
     if a <= 0.0 || !a.is_finite() || n < 3 || v <= 0.0 {
         return (base, [0.0; 4]);
     }
-    let main = (0..n - 1)
-        .max_by(|&i, &j| (knots[i + 1].0 - knots[i].0).total_cmp(&(knots[j + 1].0 - knots[j].0)))
-        .unwrap_or(0);
+    let main = main.min(n - 2);
     let k_per = v * v / (2.0 * a);
     let mut out = blend_pass(&base, n, main, k_per);
     for _ in 0..12 {
@@ -316,15 +314,23 @@ pub fn blended(knots: &[(f64, f64)], v: f64, a: f64) -> ([(f64, f64); 4], [f64; 
         if k + 2 < n && k + 1 != main && k != main && base[k + 2].0 - base[k + 1].0 > 1.0 {
             // Give way into the segment after the next knot (the overrun).
             base[k + 1].0 += 0.25 * (base[k + 2].0 - base[k + 1].0);
-        } else if k + 2 == n {
-            // A run-out that ends the pass: its slope change as large as the blend allows.
-            let (at, w) = (out.0[k], out.1[k]);
-            let m_prev = slope(base[k - 1], base[k]);
-            let m_next = slope(at, base[n - 1]);
+        } else if k + 2 == n && k != main {
+            // A run-out that ends the pass: the slope after the knot changes only as much as
+            // the widest blend that fits allows (the knot's place does not depend on it).
+            let (prev, knot) = (out.0[k - 1], base[k]);
+            let m_prev = slope(prev, knot);
+            let end = base[n - 1];
+            let full = (end.0 - knot.0).max(0.0);
+            let left = (knot.0 - prev.0).max(0.0) * if k == 1 { 1.0 } else { 0.5 };
+            let w = if main == k - 1 { 0.5 * full } else { left.min(full) };
+            let at = if main == k - 1 { (knot.0 + w, knot.1 + m_prev * w) } else { knot };
+            let m_next = slope(at, end);
             let dm = (w / k_per).min((m_next - m_prev).abs()) * (m_next - m_prev).signum();
-            base[n - 1].1 = at.1 + (m_prev + dm) * (base[n - 1].0 - at.0);
-            out = blend_pass(&base, n, main, k_per);
-            continue;
+            base[n - 1].1 = at.1 + (m_prev + dm) * (end.0 - at.0);
+            let mut fixed = blend_pass(&base, n, main, k_per);
+            fixed.0[k] = at;
+            fixed.1[k] = w.min((dm.abs() * k_per).max(0.0));
+            return (fixed.0, fixed.1);
         } else {
             break;
         }
@@ -450,7 +456,8 @@ mod tests {
         ];
         for knots in cases {
             for (v, a) in [(58.0, 0.833e-3), (16.7, 0.5e-3), (33.0, 1e-3)] {
-                let (k2, bl) = blended(knots, v, a);
+                let main = usize::from(knots.len() == 4 && knots[1].1 != knots[0].1);
+                let (k2, bl) = blended(knots, main, v, a);
                 let n = knots.len();
                 assert!(k2[..n].windows(2).all(|w| w[0].0 <= w[1].0), "{k2:?}");
                 assert_eq!((k2[0], k2[n - 1].0), (knots[0], knots[n - 1].0));

@@ -110,7 +110,7 @@ impl Exec<'_> {
             }
             PassLaw::Accelerated { .. } => Profile::thread(dist, v, accel, period, now % period),
         };
-        let (knots, blend) = super::motion::blended(&knots[..p.n], v_top, blend_a);
+        let (knots, blend) = super::motion::blended(&knots[..p.n], p.thread, v_top, blend_a);
         // A run-out cut short by its blend ends the pass short of its infeed target.
         let mut target = p.target;
         if knots[p.n - 1].1 != p.knots[p.n - 1].1 {

@@ -60,6 +60,9 @@ pub struct ThreadPass {
     pub knots: [(f64, f64); 4],
     /// Knots used (2..=4).
     pub n: usize,
+    /// The segment that is the thread proper (knots `thread` to `thread + 1`): its blends never
+    /// round it (DEC-142); the others are entries, run-outs and overruns.
+    pub thread: usize,
     /// Lead at the start of the pass, nm per revolution along `along` (> 0).
     pub lead_nm: f64,
     /// Change of the lead per revolution, nm/rev² (signed; 0: constant lead).
@@ -97,6 +100,7 @@ impl ThreadPass {
             across,
             knots,
             n: 2,
+            thread: 0,
             lead_nm: lead,
             dlead_nm: 0.0,
             phase_rev: 0.0,
