@@ -198,11 +198,11 @@ fn every_run_keeps_the_physics_invariants() {
         }
     }
     assert!(runs > 30, "{runs} runs");
-    // Known and reported, not fixed yet: LinuxCNC G76 passes step the infeed axis' speed at their
-    // knots (exec/thread.rs; harness/tests/physics_open.txt has the scenarios). A ratchet: a listed
-    // program whose physics holds fails the test until it is taken off the list.
-    const OPEN: [&str; 2] =
-        ["LinuxCNC__linuxcnc__g76.ngc [linuxcnc]", "LinuxCNC__linuxcnc__g76only.ngc [linuxcnc]"];
+    // Known and reported violations not fixed yet (none: the LinuxCNC G76 programs g76.ngc and
+    // g76only.ngc, whose passes stepped the infeed axis' speed at their knots, hold since the
+    // blends of DEC-146). A ratchet: a listed program whose physics holds fails the test until it
+    // is taken off the list.
+    const OPEN: [&str; 0] = [];
     for open in OPEN {
         assert!(broken.iter().any(|b| b.starts_with(open)), "{open}: physics holds now: take it off OPEN");
     }

@@ -82,8 +82,10 @@ pub(crate) struct Exec<'a> {
     cmd: Pos,
     /// Command minus machine position (grows under machine lock).
     lock_offset: Pos,
-    /// Last direction of motion per axis (for backlash), −1, 0, +1.
+    /// Last commanded direction of motion per axis (the timing of backlash), −1, 0, +1.
     last_dir: [i8; AXES],
+    /// Last direction the motor of each axis really moved (machine lock holds it), −1, 0, +1.
+    motor_dir: [i8; AXES],
     spindle: Spindle,
     /// Spindle state before M29 (speed, signed rpm) to restore at reset.
     pre_rigid_rpm: Option<f64>,
@@ -178,6 +180,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         cmd: [0; AXES],
         lock_offset: [0; AXES],
         last_dir: [0; AXES],
+        motor_dir: [0; AXES],
         spindle: Spindle::new(if accel > 0.0 { accel } else { f64::INFINITY }),
         pre_rigid_rpm: None,
         s_cmd: 0,

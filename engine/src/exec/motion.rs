@@ -58,11 +58,13 @@ pub enum Path {
         /// Spindle direction, +1 forward.
         spin: f64,
     },
-    /// A spindle-synchronised thread pass: the drive axis travels as `law` gives; the infeed
-    /// axis is a function of that travel through the knots; other axes move linearly with it.
+    /// A spindle-synchronised thread pass: the drive axis travels as `profile` gives (locked
+    /// to the spindle after its catch-up ramp, or reaching lead × speed: `exec/thread.rs`); the
+    /// infeed axis is a function of that travel through the knots; other axes move linearly
+    /// with it.
     Thread {
         /// The drive axis' travel against time.
-        law: Law,
+        profile: Profile,
         /// Drive axis slot.
         along: usize,
         /// Infeed axis slot.
@@ -71,53 +73,14 @@ pub enum Path {
         knots: [(f64, f64); 4],
         /// Knots used.
         n: usize,
+        /// Half the width (drive axis travel, nm) of the parabolic blend at each knot: the
+        /// infeed axis changes its slope evenly across it, within its acceleration (0: a corner).
+        blend: [f64; 4],
         /// Direction of the travel on the drive axis, ±1.
         dir: f64,
         /// Travel of the drive axis, nm (> 0).
         len: f64,
     },
-}
-
-/// How a thread pass' drive axis travels with time.
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Law {
-    /// Locked to a spindle turning at a steady speed: `lead·n + dlead·n²/2` after `n`
-    /// revolutions since the start angle.
-    Locked {
-        /// Revolutions per µs (> 0).
-        rev_us: f64,
-        /// Revolutions since the start angle when the motion started (within a µs of 0).
-        n0: f64,
-        /// Lead at the start, nm/rev.
-        lead: f64,
-        /// Lead change, nm/rev².
-        dlead: f64,
-        /// Duration, µs (ends on an interpolation tick).
-        total: Micros,
-    },
-    /// A profile accelerating to exactly lead × speed, cruising at it, decelerating to the end.
-    Ramped(Profile),
-}
-
-impl Law {
-    /// Travel (nm, clamped to `len`) and speed (nm/µs) `dt` µs after the start.
-    pub fn eval(&self, dt: Micros, len: f64) -> (f64, f64) {
-        match self {
-            Law::Locked { rev_us, n0, lead, dlead, total } => {
-                let n = n0 + rev_us * dt.min(*total) as f64;
-                ((lead * n + 0.5 * dlead * n * n).clamp(0.0, len), rev_us * (lead + dlead * n))
-            }
-            Law::Ramped(p) => p.eval(dt),
-        }
-    }
-
-    fn total(&self) -> Micros {
-        match self {
-            Law::Locked { total, .. } => *total,
-            Law::Ramped(p) => p.total,
-        }
-    }
 }
 
 /// A rapid as one coordinated straight line over `delta` (nm per axis): the path's speed and
@@ -173,10 +136,10 @@ impl Motion {
     pub fn duration(&self) -> Micros {
         match &self.path {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.total).max().unwrap_or(0),
-            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
-                profile.total
-            }
-            Path::Thread { law, .. } => law.total(),
+            Path::Line { profile, .. }
+            | Path::Arc { profile, .. }
+            | Path::Tap { profile, .. }
+            | Path::Thread { profile, .. } => profile.total,
         }
     }
 
@@ -210,10 +173,10 @@ impl Motion {
         let dt = t.saturating_sub(self.t0);
         match &self.path {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.eval(dt).1).fold(0.0, f64::max),
-            Path::Line { profile, .. } | Path::Arc { profile, .. } | Path::Tap { profile, .. } => {
-                profile.eval(dt).1
-            }
-            Path::Thread { law, len, .. } => law.eval(dt, *len).1,
+            Path::Line { profile, .. }
+            | Path::Arc { profile, .. }
+            | Path::Tap { profile, .. }
+            | Path::Thread { profile, .. } => profile.eval(dt).1,
         }
     }
 
@@ -222,21 +185,6 @@ impl Motion {
     pub fn stop_at(&mut self, t: Micros, a: f64, period: Micros) {
         let dt = t.saturating_sub(self.t0);
         let elapsed = dt;
-        if let Path::Thread { law: Law::Locked { .. }, .. } = self.path {
-            // A thread is locked to the spindle: it cannot run on along a braking profile; the
-            // axes stop where they are (a thread retract pulls out from there).
-            let here = self.pos_unclamped(t);
-            // Under machine lock the machine stayed at the start: keep it there (the lock offset
-            // takes the travel at the end; found by the physics census, INV-07).
-            if !self.locked {
-                self.start = here;
-            }
-            self.target = here;
-            self.path_end = here;
-            self.t0 = t;
-            self.path = Path::Rapid { profiles: [Profile::still(); AXES], backlash: [0.0; AXES] };
-            return;
-        }
         match &mut self.path {
             Path::Rapid { profiles, .. } => {
                 for p in profiles.iter_mut() {
@@ -246,8 +194,7 @@ impl Motion {
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
             | Path::Tap { profile, .. }
-            | Path::Thread { law: Law::Ramped(profile), .. } => *profile = profile.stop_from(dt, a, period),
-            Path::Thread { law: Law::Locked { .. }, .. } => {}
+            | Path::Thread { profile, .. } => *profile = profile.stop_from(dt, a, period),
         }
         // Re-anchor: the new profiles start at `t` and measure from the old start.
         self.t0 += elapsed;
@@ -293,31 +240,171 @@ impl Motion {
                 let s = (profile.eval(dt).0 - backlash).max(0.0);
                 p[*axis] = m.start[*axis] + (d.signum() as f64 * s).round() as Nm;
             }
-            Path::Thread { law, along, across, knots, n, dir, len } => {
-                let s = law.eval(dt, *len).0;
+            Path::Thread { profile, along, across, knots, n, blend, dir, len } => {
+                let s = profile.eval(dt).0;
                 for i in 0..AXES {
                     p[i] = m.start[i] + ((m.path_end[i] - m.start[i]) as f64 * s / len).round() as Nm;
                 }
                 p[*along] = m.start[*along] + (dir * s).round() as Nm;
-                p[*across] = across_at(&knots[..*n], s).round() as Nm;
+                p[*across] = across_at(&knots[..*n], blend, s).round() as Nm;
             }
         }
         p
     }
 }
 
-/// The infeed position at `s` along a thread pass: linear between knots, constant beyond.
-fn across_at(knots: &[(f64, f64)], s: f64) -> f64 {
+/// The infeed position at `s` along a thread pass: linear between knots, constant beyond, each
+/// inner knot `k` rounded by a parabola over `s_k ± blend[k]` (the slope changes evenly across
+/// it, so the infeed axis' acceleration is bounded; DEC-146).
+pub fn across_at(knots: &[(f64, f64)], blend: &[f64; 4], s: f64) -> f64 {
     let Some(&(_, mut c)) = knots.first() else { return 0.0 };
+    let slope = |k: usize| {
+        let ((s0, c0), (s1, c1)) = (knots[k], knots[k + 1]);
+        if s1 > s0 {
+            (c1 - c0) / (s1 - s0)
+        } else {
+            0.0
+        }
+    };
     for w in knots.windows(2) {
         let ((s0, c0), (s1, c1)) = (w[0], w[1]);
         if s >= s1 {
             c = c1;
         } else if s > s0 && s1 > s0 {
-            return c0 + (c1 - c0) * (s - s0) / (s1 - s0);
+            c = c0 + (c1 - c0) * (s - s0) / (s1 - s0);
+            break;
+        }
+    }
+    for k in 1..knots.len().saturating_sub(1).min(4) {
+        let w = blend[k];
+        let d = s - knots[k].0;
+        if w > 0.0 && d.abs() < w {
+            let dm = slope(k) - slope(k - 1);
+            c += dm * ((d + w) * (d + w) / (4.0 * w) - d.max(0.0));
         }
     }
     c
+}
+
+/// The blends of [`across_at`] for knots (drive travel, infeed) at drive speed up to `v` nm/µs
+/// and infeed acceleration `a` nm/µs²: at each inner knot the half width over which the slope
+/// change `dm` keeps the infeed axis within `a` (`|dm|·v² / 2a`). The thread proper (segment
+/// `main`) is never rounded: a knot that ends it (a run-out's start, seed 002 "在距离螺纹切削终点
+/// 固定长度…处 … X 轴沿退刀方向…加速退出") or begins it (the end of an entry taper) moves off it by
+/// the half width along the thread's line, so that the blend starts (or ends) exactly at the knot.
+/// Other inner knots are rounded on both sides. The first and last knots are never rounded (the
+/// drive axis starts and stops there), so a blend may take a whole segment next to them and half
+/// of any other. Where a blend still does not fit, the segment after the main one gives way: a
+/// knot between two segments off the thread (cycle 832's clearance reached at the thread's end)
+/// moves on into the overrun, and a run-out that ends the pass (G92.3) is cut short (the infeed
+/// axis reaches less far; the retract that follows takes it out). Returns the knots to
+/// interpolate and the blends.
+pub fn blended(knots: &[(f64, f64)], main: usize, v: f64, a: f64) -> ([(f64, f64); 4], [f64; 4]) {
+    let n = knots.len().min(4);
+    let mut base = [(0.0, 0.0); 4];
+    base[..n].copy_from_slice(&knots[..n]);
+    if a <= 0.0 || !a.is_finite() || n < 3 || v <= 0.0 {
+        return (base, [0.0; 4]);
+    }
+    let main = main.min(n - 2);
+    let k_per = v * v / (2.0 * a);
+    let mut out = blend_pass(&base, n, main, k_per);
+    for _ in 0..12 {
+        let Some(k) = (1..n - 1).find(|&k| out.2[k]) else { break };
+        if k + 2 < n && k + 1 != main && k != main && base[k + 2].0 - base[k + 1].0 > 1.0 {
+            // Give way into the segment after the next knot (the overrun).
+            base[k + 1].0 += 0.25 * (base[k + 2].0 - base[k + 1].0);
+        } else if k + 2 == n && k != main {
+            // A run-out that ends the pass: the slope after the knot changes only as much as
+            // the widest blend that fits allows (the knot's place does not depend on it).
+            let (prev, knot) = (out.0[k - 1], base[k]);
+            let m_prev = slope(prev, knot);
+            let end = base[n - 1];
+            let full = (end.0 - knot.0).max(0.0);
+            let left = (knot.0 - prev.0).max(0.0) * if k == 1 { 1.0 } else { 0.5 };
+            let w = if main == k - 1 { 0.5 * full } else { left.min(full) };
+            let at = if main == k - 1 { (knot.0 + w, knot.1 + m_prev * w) } else { knot };
+            let m_next = slope(at, end);
+            let dm = (w / k_per).min((m_next - m_prev).abs()) * (m_next - m_prev).signum();
+            base[n - 1].1 = at.1 + (m_prev + dm) * (end.0 - at.0);
+            let mut fixed = blend_pass(&base, n, main, k_per);
+            fixed.0[k] = at;
+            fixed.1[k] = w.min((dm.abs() * k_per).max(0.0));
+            return (fixed.0, fixed.1);
+        } else {
+            break;
+        }
+        out = blend_pass(&base, n, main, k_per);
+    }
+    (out.0, out.1)
+}
+
+/// The slope of the infeed against the drive axis from `p` to `q`.
+fn slope(p: (f64, f64), q: (f64, f64)) -> f64 {
+    if q.0 > p.0 {
+        (q.1 - p.1) / (q.0 - p.0)
+    } else {
+        0.0
+    }
+}
+
+/// One round of [`blended`]: the knots moved off the main segment, the half widths, and which
+/// blends were cut by their room.
+fn blend_pass(
+    knots: &[(f64, f64); 4],
+    n: usize,
+    main: usize,
+    k_per: f64,
+) -> ([(f64, f64); 4], [f64; 4], [bool; 4]) {
+    let mut k2 = *knots;
+    let mut out = [0.0; 4];
+    let mut capped = [false; 4];
+    // Room on one side of a knot: a whole segment next to the first or last knot, else half.
+    let room =
+        |p: (f64, f64), q: (f64, f64), whole: bool| (q.0 - p.0).max(0.0) * if whole { 1.0 } else { 0.5 };
+    for k in 1..n - 1 {
+        let (prev, next) = (k2[k - 1], knots[k + 1]);
+        // Where the knot sits for a half width w: off the main segment along its line.
+        let shifted = |w: f64| {
+            if main == k - 1 {
+                (knots[k].0 + w, knots[k].1 + slope(prev, knots[k]) * w)
+            } else if main == k {
+                (knots[k].0 - w, knots[k].1 - slope(knots[k], next) * w)
+            } else {
+                knots[k]
+            }
+        };
+        // The window stays between the neighbours (their own blends take the other half): a
+        // shifted blend lies wholly on one side of the knot.
+        let cap = if main == k - 1 {
+            0.5 * room(knots[k], next, k + 2 == n)
+        } else if main == k {
+            0.5 * room(prev, knots[k], k == 1)
+        } else {
+            room(prev, knots[k], k == 1).min(room(knots[k], next, k + 2 == n))
+        };
+        let want = |w: f64| {
+            let at = shifted(w);
+            (slope(at, next) - slope(prev, at)).abs() * k_per
+        };
+        // The fixed point of w = want(w) (want grows with w), from 0.
+        let mut w = 0.0;
+        for _ in 0..30 {
+            w = want(w).min(cap);
+        }
+        k2[k] = shifted(w);
+        out[k] = w;
+        capped[k] = want(w) > w * (1.0 + 1e-6) + 1.0;
+    }
+    (k2, out, capped)
+}
+
+/// The steepest slope of the infeed axis against the drive axis over the knots.
+pub fn steepest(knots: &[(f64, f64)]) -> f64 {
+    knots
+        .windows(2)
+        .map(|w| if w[1].0 > w[0].0 { ((w[1].1 - w[0].1) / (w[1].0 - w[0].0)).abs() } else { 0.0 })
+        .fold(0.0, f64::max)
 }
 
 #[cfg(test)]
@@ -354,5 +441,40 @@ mod tests {
         }
         assert_eq!(m.target[2], last);
         assert!((m.target[2] - (before - 200_000)).abs() <= 1, "{}", m.target[2]);
+    }
+
+    #[test]
+    fn blended_knots_stay_in_order_and_the_infeed_never_jumps() {
+        // G92.3 with a run-out longer than its thread (campaign census seed 7, case 43: the knot
+        // moved past its neighbour and the infeed jumped 0.4 mm in 1 ms), a short steep 832
+        // run-out before its overrun, a G76 entry and exit taper, a seed 002 run-out.
+        let cases: [&[(f64, f64)]; 4] = [
+            &[(0.0, 18e6), (0.8e6, 18e6), (1.8e6, 18.5e6)],
+            &[(0.0, 10e6), (20e6, 10e6), (20.5e6, 11.27e6), (22.5e6, 11.27e6)],
+            &[(0.0, 7e6), (1e6, 6e6), (19e6, 6e6), (20e6, 7e6)],
+            &[(0.0, 18e6), (23e6, 18e6), (25e6, 19e6)],
+        ];
+        for knots in cases {
+            for (v, a) in [(58.0, 0.833e-3), (16.7, 0.5e-3), (33.0, 1e-3)] {
+                let main = usize::from(knots.len() == 4 && knots[1].1 != knots[0].1);
+                let (k2, bl) = blended(knots, main, v, a);
+                let n = knots.len();
+                assert!(k2[..n].windows(2).all(|w| w[0].0 <= w[1].0), "{k2:?}");
+                assert_eq!((k2[0], k2[n - 1].0), (knots[0], knots[n - 1].0));
+                let steep = steepest(&k2[..n]);
+                let step = 1000.0;
+                let mut last = across_at(&k2[..n], &bl, 0.0);
+                let mut s = step;
+                while s <= knots[n - 1].0 {
+                    let c = across_at(&k2[..n], &bl, s);
+                    assert!(
+                        (c - last).abs() <= steep * step * 1.001 + 1e-6,
+                        "{knots:?} at {s}: {last} → {c}"
+                    );
+                    last = c;
+                    s += step;
+                }
+            }
+        }
     }
 }

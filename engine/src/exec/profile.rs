@@ -3,7 +3,9 @@
 
 use crate::units::{ceil_to, Micros};
 
+mod catch_up;
 mod follow;
+pub use catch_up::catch_up_lag;
 pub use follow::Ramp;
 
 /// Most pieces a profile has (a feed following an accelerating spindle has the most).

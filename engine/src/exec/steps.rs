@@ -313,9 +313,16 @@ impl Exec<'_> {
     }
 
     /// Backlash to take up when axis `i` moves in direction `dir` (and records the direction).
+    /// Under machine lock the motor stays still: a locked motion keeps the timing of the
+    /// commanded reversal (COM-MOT-04: the same timing with and without the lock) but leaves the
+    /// motor's own direction alone, which the first motion after the lock then meets (it used to
+    /// take up a backlash the motor never left: campaign seed 778, INV-11).
     pub(super) fn backlash(&mut self, i: usize, dir: i8) -> f64 {
-        let last = self.last_dir[i];
+        let last = if self.machine_lock { self.last_dir[i] } else { self.motor_dir[i] };
         self.last_dir[i] = dir;
+        if !self.machine_lock {
+            self.motor_dir[i] = dir;
+        }
         if last != 0 && last != dir {
             self.cfg.backlash_nm[i] as f64
         } else {

@@ -1,14 +1,15 @@
 //! Spindle-synchronised thread passes (`Step::Thread`), the one executor of every threading cycle:
 //! the pass waits for the spindle to turn at a steady speed, then for its start angle (the
 //! one-revolution signal plus the pass' phase, in the sense the spindle turns); from that instant
-//! the drive axis travels as the spindle's angle gives ([`PassLaw`]: locked, or reaching lead ×
-//! speed with the cutting feed's acceleration), the infeed axis through the pass' knots; and the
-//! thread retract on feed hold. Feed override and dry run do not act.
+//! the drive axis travels as the spindle's angle gives ([`PassLaw`]: locked after a catch-up ramp
+//! that starts a constant lag before that angle, or reaching lead × speed with the cutting feed's
+//! acceleration), the infeed axis through the pass' knots, blended within its acceleration
+//! (DEC-146); and the thread retract on feed hold. Feed override and dry run do not act.
 //!
 //! Knows no G code or cycle: everything arrives as a [`ThreadPass`].
 
-use super::motion::{Law, Path};
-use super::profile::Profile;
+use super::motion::Path;
+use super::profile::{catch_up_lag, Profile};
 use super::{Active, Exec};
 use crate::alarm::{Alarm, AlarmKind};
 use crate::plan::{PassLaw, Step, ThreadPass};
@@ -35,22 +36,58 @@ impl Exec<'_> {
         let rev_us = rpm.abs() / 60e6;
         let lead = p.lead_nm.max(1.0);
         let vmax = self.cfg.feed_max_nm_min / 60e6;
-        let accel = vmax / self.cfg.feed_ramp_us.max(1) as f64;
+        let a_cut = vmax / self.cfg.feed_ramp_us.max(1) as f64;
         let mut v = rpm.abs() * lead / 60e6;
-        if let PassLaw::Accelerated { room } = p.law {
-            match room {
-                Some((approach, overrun)) => {
-                    if let Some(a) = thread_room(lead, rpm.abs(), vmax, accel, (approach, overrun)) {
-                        self.raise(a);
-                        return;
-                    }
+        let start = self.cmd;
+        let (a0, _) = p.knots[0];
+        let (a_end, _) = p.knots[p.n - 1];
+        let dist = (a_end - start[p.along] as f64).abs();
+        let mut knots = [(0.0, 0.0); 4];
+        for (k, &(ak, ck)) in p.knots[..p.n].iter().enumerate() {
+            knots[k] = ((ak - a0).abs(), ck);
+        }
+        knots[0].1 = start[p.across] as f64;
+        // The drive axis ramps at the cutting acceleration, less where a steep infeed would take
+        // the infeed axis (slope × as fast) past its own limit (its rapid rate / time constant or
+        // the cutting acceleration), or past half of it when knots need blends: what it leaves
+        // is for the blends (DEC-146).
+        let steep = super::motion::steepest(&knots[..p.n]);
+        let a_across =
+            (self.cfg.rapid_nm_min[p.across] / 60e6 / self.cfg.rapid_ramp_us[p.across].max(1) as f64)
+                .max(a_cut);
+        let share = if p.n > 2 { 0.5 } else { 1.0 };
+        let accel = if steep > 0.0 { a_cut.min(share * a_across / steep) } else { a_cut };
+        let blend_a = a_across - steep * accel;
+        // The locked law's acceleration (a lead changing by dlead per turn) and the lag of its
+        // catch-up ramp: the pass starts that long before its start angle (DEC-146).
+        let acc = p.dlead_nm * rev_us * rev_us;
+        let mut lag_rev = 0.0;
+        let mut v_top = v;
+        match p.law {
+            PassLaw::Accelerated { room: Some((approach, overrun)) } => {
+                if let Some(a) = thread_room(lead, rpm.abs(), vmax, accel, (approach, overrun)) {
+                    self.raise(a);
+                    return;
                 }
-                None => v = v.min(vmax),
+            }
+            PassLaw::Accelerated { room: None } => {
+                v = v.min(vmax);
+                v_top = v;
+            }
+            PassLaw::Locked => {
+                // The fastest the law runs: at the start, or at the end of a growing lead.
+                let lead_end = (lead * lead + 2.0 * p.dlead_nm * dist).max(0.0).sqrt();
+                if let Some(a) = thread_locked(lead.max(lead_end), p.dlead_nm, rpm.abs(), vmax, accel) {
+                    self.raise(a);
+                    return;
+                }
+                lag_rev = catch_up_lag(v, acc, accel) * rev_us;
+                v_top = rpm.abs() * lead.max(lead_end) / 60e6;
             }
         }
-        // Revolutions since the start angle (index + phase), in the sense the spindle turns,
-        // signed: within half a turn either side.
-        let turned = angle * rpm.signum() / 360.0 - p.phase_rev;
+        // Revolutions since the start angle (index + phase − the catch-up's lag), in the sense
+        // the spindle turns, signed: within half a turn either side.
+        let turned = angle * rpm.signum() / 360.0 - p.phase_rev + lag_rev;
         let past = turned - turned.floor();
         let n0 = if past > 0.5 { past - 1.0 } else { past };
         if n0.abs() > rev_us * 0.5 + 1e-9 {
@@ -62,43 +99,32 @@ impl Exec<'_> {
             self.active = Active::Until(now + dt);
             return;
         }
-        let start = self.cmd;
-        let (a0, _) = p.knots[0];
-        let (a_end, _) = p.knots[p.n - 1];
-        let dist = (a_end - start[p.along] as f64).abs();
         let dir = if a_end >= start[p.along] as f64 { 1.0 } else { -1.0 };
-        let mut knots = [(0.0, 0.0); 4];
-        for (k, &(ak, ck)) in p.knots[..p.n].iter().enumerate() {
-            knots[k] = ((ak - a0).abs(), ck);
-        }
-        knots[0].1 = start[p.across] as f64;
         if dist == 0.0 {
             return;
         }
-        let law = match p.law {
+        let profile = match p.law {
+            // The law's origin (the start angle itself) comes lag − n0 revolutions from now.
             PassLaw::Locked => {
-                // n where lead·n + dlead·n²/2 = dist (the stable form of the quadratic's root).
-                let (l, d) = (lead, p.dlead_nm);
-                let revs = if d == 0.0 {
-                    dist / l
-                } else {
-                    2.0 * dist / (l + (l * l + 2.0 * d * dist).max(0.0).sqrt())
-                };
-                let left = ((revs - n0) / rev_us).ceil().max(1.0) as Micros;
-                let total = ceil_to(now + left, period) - now;
-                Law::Locked { rev_us, n0, lead: l, dlead: d, total }
+                Profile::catch_up(dist, v, acc, (lag_rev - n0) / rev_us, accel, period, now % period)
             }
-            PassLaw::Accelerated { .. } => Law::Ramped(Profile::thread(dist, v, accel, period, now % period)),
+            PassLaw::Accelerated { .. } => Profile::thread(dist, v, accel, period, now % period),
         };
+        let (knots, blend) = super::motion::blended(&knots[..p.n], p.thread, v_top, blend_a);
+        // A run-out cut short by its blend ends the pass short of its infeed target.
+        let mut target = p.target;
+        if knots[p.n - 1].1 != p.knots[p.n - 1].1 {
+            target[p.across] = knots[p.n - 1].1.round() as crate::units::Nm;
+        }
         for axis in [p.along, p.across] {
-            let d = p.target[axis] - start[axis];
+            let d = target[axis] - start[axis];
             if d != 0 {
                 self.backlash(axis, d.signum() as i8);
             }
         }
         self.start_motion(
-            p.target,
-            Path::Thread { law, along: p.along, across: p.across, knots, n: p.n, dir, len: dist },
+            target,
+            Path::Thread { profile, along: p.along, across: p.across, knots, n: p.n, blend, dir, len: dist },
         );
         // The spindle turns in speed mode: machine lock holds the axes, not the spindle.
         if let Some(m) = &mut self.motion {
@@ -106,8 +132,8 @@ impl Exec<'_> {
         }
     }
 
-    /// Feed hold during a thread pass with thread retract: the thread stops where it is, the
-    /// short axis and then the long axis rapid back to the cycle start, the control holds, and
+    /// Feed hold during a thread pass with thread retract: the thread decelerates to a stop
+    /// along its path, the short axis and then the long axis rapid back to the cycle start, the control holds, and
     /// cycle start cuts the interrupted pass again from its cut start. Returns false when the
     /// present motion is not such a pass.
     pub(super) fn thread_retract(&mut self) -> bool {
@@ -118,13 +144,13 @@ impl Exec<'_> {
             return false;
         }
         let cut_start = m.start;
-        if let Some(m) = &mut self.motion {
-            m.stop_at(self.now, f64::INFINITY, self.cfg.period_us);
-        }
-        self.end_motion();
-        self.active = Active::Idle;
-        let here = self.cmd;
-        let mut out = here;
+        // The drive axis decelerates along the thread at the cutting acceleration (it used to
+        // stop where it was, at speed: INV-11); the retract starts where it comes to rest.
+        let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
+        let period = self.cfg.period_us;
+        let Some(m) = &mut self.motion else { return false };
+        m.stop_at(self.now, a, period);
+        let mut out = m.target;
         out[r.short_axis] = r.cycle_start[r.short_axis];
         let steps = [
             Step::Phase(Phase::Retract),
@@ -147,17 +173,8 @@ impl Exec<'_> {
 /// maximum cutting feed (NC-1077), the ramps within the approach and overrun paths (NC-1078).
 fn thread_room(lead: f64, rpm: f64, vmax: f64, a: f64, (approach, overrun): (i64, i64)) -> Option<Alarm> {
     let v = rpm * lead / 60e6;
-    if v > vmax * (1.0 + 1e-12) {
-        return Some(Alarm::new(
-            AlarmKind::ThreadFeedTooHigh,
-            format!(
-                "pitch {:.4} mm x {:.0} rpm = {:.0} mm/min, above the maximum cutting feed {:.0} mm/min",
-                lead / 1e6,
-                rpm,
-                v * 60.0,
-                vmax * 60.0
-            ),
-        ));
+    if let Some(alarm) = feed_too_high(lead, rpm, vmax) {
+        return Some(alarm);
     }
     let ramp = v * v / (2.0 * a);
     let room = approach.min(overrun) as f64;
@@ -174,4 +191,45 @@ fn thread_room(lead: f64, rpm: f64, vmax: f64, a: f64, (approach, overrun): (i64
         ));
     }
     None
+}
+
+/// The checks of a locked pass (DEC-146): its fastest lead × speed within the maximum cutting
+/// feed, and the acceleration of its lead change (dlead × speed²) below the cutting
+/// acceleration `a` that has to catch up with it (NC-1077 both: the thread is too fast for the
+/// axis). Seed 002: "因 D 的增加/减小使螺距超过允许值 … 时产生报警".
+fn thread_locked(lead_max: f64, dlead: f64, rpm: f64, vmax: f64, a: f64) -> Option<Alarm> {
+    if let Some(alarm) = feed_too_high(lead_max, rpm, vmax) {
+        return Some(alarm);
+    }
+    let acc = dlead.abs() * (rpm / 60e6).powi(2);
+    if acc >= a {
+        return Some(Alarm::new(
+            AlarmKind::ThreadFeedTooHigh,
+            format!(
+                "lead change {:.4} mm per turn at {:.0} rpm asks {:.0} mm/s² of the feed axis, not below its cutting acceleration {:.0} mm/s²",
+                dlead / 1e6,
+                rpm,
+                acc * 1e6,
+                a * 1e6
+            ),
+        ));
+    }
+    None
+}
+
+/// NC-1077 when `lead` × `rpm` is above the maximum cutting feed `vmax` (nm/µs).
+fn feed_too_high(lead: f64, rpm: f64, vmax: f64) -> Option<Alarm> {
+    let v = rpm * lead / 60e6;
+    (v > vmax * (1.0 + 1e-12)).then(|| {
+        Alarm::new(
+            AlarmKind::ThreadFeedTooHigh,
+            format!(
+                "pitch {:.4} mm x {:.0} rpm = {:.0} mm/min, above the maximum cutting feed {:.0} mm/min",
+                lead / 1e6,
+                rpm,
+                v * 60.0,
+                vmax * 60.0
+            ),
+        )
+    })
 }

@@ -98,6 +98,7 @@ impl ThreadCycle {
             across: s,
             knots,
             n: n + 1,
+            thread: 0,
             lead_nm: self.lead_nm as f64,
             dlead_nm: self.dlead_nm as f64,
             phase_rev: self.phase(k),

@@ -129,6 +129,7 @@ impl ThreadCycle {
             across: self.across,
             knots: fk,
             n,
+            thread: 0,
             lead_nm: self.lead_nm as f64,
             dlead_nm: 0.0,
             phase_rev: angle_mdeg as f64 / 360_000.0,

@@ -110,6 +110,8 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
     out.push(Step::Rapid { target: at(safe_x, start_z) });
     let e = c.taper.min(end_z.saturating_sub(start_z).saturating_abs());
     let mut z = start_z;
+    // The thread proper follows an entry taper.
+    let thread = usize::from(c.taper_ends & 1 != 0 && e > 0);
     if c.taper_ends & 1 != 0 && e > 0 {
         out.push(Step::Rapid { target: at(taper_x, start_z) });
         push(knot(taper_x, start_z));
@@ -139,6 +141,7 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
             across: c.x_axis,
             knots,
             n,
+            thread,
             lead_nm: c.pitch as f64,
             dlead_nm: 0.0,
             phase_rev: 0.0,

@@ -2,9 +2,10 @@
 //! built from (GSK G92.3, Heidenhain cycle 832, LinuxCNC G33 and G76, KND G32 and G92): the pass
 //! starts where the spindle's angle passes its one-revolution signal plus the pass' phase; from
 //! there the drive axis (`along`) travels `lead·n + dlead·n²/2` after `n` revolutions, locked to
-//! the spindle's angle ([`PassLaw::Locked`]) or reaching that law's speed with the cutting feed's
-//! acceleration ([`PassLaw::Accelerated`]); the infeed axis (`across`) is a piecewise-linear
-//! function of the drive axis through the pass' knots (tapers, run-outs, chamfers); any other axis
+//! the spindle's angle after a catch-up ramp ([`PassLaw::Locked`]) or reaching that law's speed
+//! with the cutting feed's acceleration ([`PassLaw::Accelerated`]); the infeed axis (`across`) is
+//! a function of the drive axis through the pass' knots (tapers, run-outs, chamfers), blended at
+//! each knot within its acceleration (DEC-146); any other axis
 //! moves linearly with the drive axis. The executor (`exec/thread.rs`) carries it out.
 //!
 //! Knows no G code: a cycle builder or a dialect fills it in.
@@ -16,8 +17,11 @@ use crate::units::Nm;
 /// How the drive axis follows the spindle's angle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PassLaw {
-    /// From the first instant on, exactly at the position the spindle's angle gives (GSK G92.3,
-    /// GSK-G923-07); the pass ends where the law reaches the end point.
+    /// Exactly at the position the spindle's angle gives (GSK G92.3, GSK-G923-07, variable lead
+    /// allowed), reached with a catch-up ramp that starts a constant lag before the start angle
+    /// and left with a deceleration to rest at the end point (DEC-146); a fastest lead × speed
+    /// above the maximum cutting feed, or a lead change faster than the axis can follow, raises
+    /// NC-1077.
     Locked,
     /// The axis accelerates with the cutting feed's acceleration to exactly lead × the spindle's
     /// speed, cruises at it and decelerates to the end point (seed 001: "在螺纹切削开始及结束部分,
@@ -56,6 +60,9 @@ pub struct ThreadPass {
     pub knots: [(f64, f64); 4],
     /// Knots used (2..=4).
     pub n: usize,
+    /// The segment that is the thread proper (knots `thread` to `thread + 1`): its blends never
+    /// round it (DEC-146); the others are entries, run-outs and overruns.
+    pub thread: usize,
     /// Lead at the start of the pass, nm per revolution along `along` (> 0).
     pub lead_nm: f64,
     /// Change of the lead per revolution, nm/rev² (signed; 0: constant lead).
@@ -93,6 +100,7 @@ impl ThreadPass {
             across,
             knots,
             n: 2,
+            thread: 0,
             lead_nm: lead,
             dlead_nm: 0.0,
             phase_rev: 0.0,

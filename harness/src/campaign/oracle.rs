@@ -84,6 +84,13 @@ fn compare_run(
     match compare {
         CompareRun::DryRunAt(t) => other.inputs = other.inputs.at(t, Input::DryRun(true)),
         CompareRun::MachineLock => {
+            // A case that switches the lock off itself is no longer "the same run under the
+            // lock": after the unlock the variant's motors, which never moved, take up backlash
+            // where the plain run's do not or the other way round (COM-MOT-03; campaign census
+            // seed 7, case 1465, once the motor's own direction was kept through locked motions).
+            if opts.inputs.inputs.iter().any(|i| i.input == Input::MachineLock(false)) {
+                return None;
+            }
             // The lock acts first of everything at t = 0.
             other
                 .inputs
@@ -123,28 +130,10 @@ pub fn check_case(case: &Case) -> Report {
     };
     let (trace, violations) = check_run(&m, &program, &case.options(), &case.context(), case.compare_run());
     report.violations = violations;
-    if physics_open(case).is_some() {
-        // A known, reported physics violation not fixed yet: judged again once it is fixed.
-        report.violations.retain(|v| !Invariant::PHYSICS.contains(&v.invariant));
-    }
     if let Some(t) = trace {
         observe(&t, &mut report);
     }
     report
-}
-
-/// Why the physics invariants (INV-11..INV-14) are not judged on `case` yet, if they are not:
-/// the open items of `docs/invariants.md` ("Open"), each a reported bug with its owner. Every
-/// other case is judged.
-pub fn physics_open(case: &Case) -> Option<&'static str> {
-    use super::case::Cycle;
-    match case.program.cycle {
-        // Issue 12, reported to the owner of the thread-pass executors (exec/thread.rs,
-        // exec/thread_832.rs): a pass starts on its tick at full thread speed (a step of the
-        // axis' speed), and a fast lead runs the axis above its rate.
-        Cycle::GskG923 | Cycle::Heidenhain832 => Some("thread passes start at full speed (exec/thread*.rs)"),
-        _ => None,
-    }
 }
 
 /// Coverage: the alarms and the situations the run reached.
