@@ -6,7 +6,7 @@
 //!
 //! Knows no G code: it acts on the spindle's command and on the motion in progress.
 
-use super::motion::{Law, Motion, Path};
+use super::motion::{Motion, Path};
 use super::profile::{Profile, Ramp};
 use super::Exec;
 use crate::plan::{FollowKind, Step};
@@ -84,7 +84,7 @@ impl Exec<'_> {
                 Path::Rapid { profiles, backlash: b }
             }
             (
-                Path::Thread { law: Law::Ramped(p), along, across, knots, n, dir, len },
+                Path::Thread { profile: p, along, across, knots, n, dir, len, blend },
                 None,
                 Some(Step::Thread(t)),
             ) => {
@@ -94,17 +94,20 @@ impl Exec<'_> {
                 let Some(q) = Profile::following_from(len - s, v, per_rpm, ramp, vmax, accel, period) else {
                     return;
                 };
-                // The knots measured from here.
+                // The knots measured from here, each with its blend.
                 let mut k = [(0.0, here[*across] as f64); 4];
+                let mut w = [0.0; 4];
                 let mut used = 1;
-                for &(a, c) in &knots[..*n] {
+                for (&(a, c), &bw) in knots[..*n].iter().zip(blend.iter()) {
                     if a > s && used < k.len() {
                         k[used] = (a - s, c);
+                        w[used] = bw;
                         used += 1;
                     }
                 }
                 Path::Thread {
-                    law: Law::Ramped(q),
+                    profile: q,
+                    blend: w,
                     along: *along,
                     across: *across,
                     knots: k,
