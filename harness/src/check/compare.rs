@@ -14,6 +14,10 @@ use super::tolerance::{attribute, mm_nm, ms_us, Anchor, Context, Tolerances, Top
 use super::{Divergence, Point, MAX_DIVERGENCES};
 use crate::scenario::timeline::{fixed, ms};
 
+/// Recorded samples kept in the compact copy, at most (the rest are compared and plotted, not
+/// kept: memory does not follow the recording's length).
+pub const MAX_COMPACT_SAMPLES: usize = 20_000;
+
 /// Recorded events buffered while looking for the anchor, at most.
 const MAX_PENDING: usize = 2_000_000;
 
@@ -45,8 +49,8 @@ impl Run {
 }
 
 /// Compares recorded events with the reference, one at a time.
-pub struct Comparator<'r> {
-    pub(super) r: &'r Reference<'r>,
+pub struct Comparator<'r, 'a> {
+    pub(super) r: &'r Reference<'a>,
     pub(super) tol: Tolerances,
     dialect: String,
     rules: Vec<String>,
@@ -88,6 +92,11 @@ pub struct Comparator<'r> {
     /// Plot points of the recorded trace (one per bucket).
     pub series: Vec<Point>,
     bucket_us: i64,
+    /// The plot bucket being filled: its start, its points of least and greatest value.
+    bucket: Option<(i64, Point, Point)>,
+    /// How far back in reference time the comparison still looks (µs).
+    floor_us: i64,
+    compact_samples: usize,
     /// Recorded events and samples seen.
     pub events_seen: u64,
     /// Recorded samples seen.
@@ -121,9 +130,9 @@ pub struct Comparator<'r> {
     ref_handshake: Vec<super::handshake::Fault>,
 }
 
-impl<'r> Comparator<'r> {
+impl<'r, 'a> Comparator<'r, 'a> {
     /// A comparator against `r`.
-    pub fn new(r: &'r Reference<'r>, tol: Tolerances, anchor: Anchor, scenario_rules: Vec<String>) -> Self {
+    pub fn new(r: &'r Reference<'a>, tol: Tolerances, anchor: Anchor, scenario_rules: Vec<String>) -> Self {
         let threshold = mm_nm(tol.position_mm);
         let rpm_threshold = (tol.speed_rpm.max(0.001) * 1000.0).round() as i64;
         let watch = match anchor {
@@ -145,7 +154,8 @@ impl<'r> Comparator<'r> {
             Anchor::Offset(o) => Some(o),
             _ => None,
         };
-        let bucket_us = (r.end_us / 1500).max(1000);
+        let bucket_us = (r.end_us / 750).max(1000);
+        let floor_us = ms_us(tol.envelope_ms.max(tol.event_ms)) + 1;
         Comparator {
             r,
             tol,
@@ -156,7 +166,7 @@ impl<'r> Comparator<'r> {
             anchor,
             offset,
             pending: Vec::new(),
-            matcher: Some(Matcher::new(r.trace)),
+            matcher: Some(Matcher::new(&r.trace)),
             matched: 0,
             keys: KeyTracker::new(r.tap),
             findings: Vec::new(),
@@ -180,6 +190,9 @@ impl<'r> Comparator<'r> {
             alarms: 0,
             series: Vec::new(),
             bucket_us,
+            bucket: None,
+            floor_us,
+            compact_samples: 0,
             events_seen: 0,
             samples_seen: 0,
             max_sync_nm: 0.0,
@@ -196,7 +209,7 @@ impl<'r> Comparator<'r> {
             motion,
             marks: Vec::new(),
             handshake: Default::default(),
-            ref_handshake: super::handshake::faults_of(r.trace),
+            ref_handshake: super::handshake::faults_of(&r.trace),
         }
     }
 
@@ -208,7 +221,7 @@ impl<'r> Comparator<'r> {
             Key::Alarm(_) => carried.alarms,
             Key::Edge(..) => true,
         };
-        self.matcher = Some(Matcher::new_filtered(self.r.trace, keep));
+        self.matcher = Some(Matcher::new_filtered(&self.r.trace, keep));
         self.not_comparable = super::carried::left_out(self.r, &carried);
         self.carried = carried;
         self
@@ -343,6 +356,7 @@ impl<'r> Comparator<'r> {
         match &ev.event {
             Event::Sample(s) => {
                 self.samples_seen += 1;
+                self.r.forget_before(t - self.floor_us);
                 if t >= 0 && t <= self.r.end_us {
                     if let Some(p) = self.last_sample_t {
                         self.max_gap_us = self.max_gap_us.max(t - p);
@@ -354,14 +368,18 @@ impl<'r> Comparator<'r> {
                 self.envelope(t, s);
                 self.last_sample = Some((t, *s));
                 let period = (self.r.trace.meta.sample_us as i64).max(1000);
-                if t <= keep_until && t >= 0 && self.last_kept.is_none_or(|k| t - k >= period) {
+                if t <= keep_until
+                    && t >= 0
+                    && self.compact_samples < MAX_COMPACT_SAMPLES
+                    && self.last_kept.is_none_or(|k| t - k >= period)
+                {
                     self.last_kept = Some(t);
+                    self.compact_samples += 1;
                     self.compact.push(TraceEvent { t_us: t as u64, event: ev.event.clone() });
                 }
-                if t >= 0 && t <= keep_until && self.series.last().is_none_or(|p| t - p.t >= self.bucket_us) {
+                if t >= 0 && t <= keep_until {
                     let tap = self.r.tap.map(|tp| s.axes[tp.slot]);
-                    let err = self.cur_sync;
-                    self.series.push(Point { t, tap, rpm: s.spindle_mrpm, sync_nm: err });
+                    self.plot(Point { t, tap, rpm: s.spindle_mrpm, sync_nm: self.cur_sync });
                 }
             }
             Event::Signal { signal, value } => {
@@ -397,8 +415,38 @@ impl<'r> Comparator<'r> {
         }
     }
 
+    /// One plot point: each bucket of the series keeps its points of least and greatest tap
+    /// position (spindle speed without a tap), in time order.
+    fn plot(&mut self, p: Point) {
+        let v = |p: &Point| p.tap.unwrap_or(p.rpm);
+        match &mut self.bucket {
+            Some((b0, lo, hi)) if p.t - *b0 < self.bucket_us => {
+                if v(&p) < v(lo) {
+                    *lo = p;
+                }
+                if v(&p) > v(hi) {
+                    *hi = p;
+                }
+            }
+            _ => {
+                self.flush_plot();
+                self.bucket = Some((p.t, p, p));
+            }
+        }
+    }
+
+    fn flush_plot(&mut self) {
+        if let Some((_, lo, hi)) = self.bucket.take() {
+            let (a, b) = if lo.t <= hi.t { (lo, hi) } else { (hi, lo) };
+            self.series.push(a);
+            if b.t != a.t {
+                self.series.push(b);
+            }
+        }
+    }
+
     fn keep(&mut self, t: i64, ev: &TraceEvent) {
-        let cap = 4 * self.r.trace.events.len().max(10_000);
+        let cap = 4 * self.r.total_events.max(10_000);
         if t >= 0 && self.compact.len() < cap {
             self.compact.push(TraceEvent { t_us: t as u64, event: ev.event.clone() });
         }
@@ -639,6 +687,7 @@ impl<'r> Comparator<'r> {
                 self.aligned(p);
             }
         }
+        self.flush_plot();
         let mut faults = Vec::new();
         std::mem::take(&mut self.handshake).finish(&mut faults);
         super::handshake::report(self, faults);
@@ -671,16 +720,14 @@ impl<'r> Comparator<'r> {
         // sample), over ± the event window: the two clocks are tied by an event recorded within
         // its window, so a spindle still ramping there may be anywhere in that range.
         let w = ms_us(self.tol.event_ms);
-        let speed = |x: i64| match self.r.t.last() {
-            Some(&tl) if x < tl => self.r.value_at(x, |q| q.spindle_mrpm).map_or(0, |v| v.round() as i64),
+        let speed = |x: i64| match self.r.last_sample_t {
+            Some(tl) if x < tl => self.r.value_at(x, |q| q.spindle_mrpm).map_or(0, |v| v.round() as i64),
             _ => end.state.spindle_mrpm,
         };
         let (mut lo, mut hi) = (speed(t - w).min(speed(t + w)), speed(t - w).max(speed(t + w)));
-        let i0 = self.r.t.partition_point(|&x| x < t - w);
-        let i1 = self.r.t.partition_point(|&x| x <= t + w);
-        for q in &self.r.s[i0..i1.max(i0)] {
-            lo = lo.min(q.spindle_mrpm);
-            hi = hi.max(q.spindle_mrpm);
+        if let Some((a, b)) = self.r.speed_range(t - w, t + w) {
+            lo = lo.min(a);
+            hi = hi.max(b);
         }
         let want = speed(t);
         let tol = (self.tol.speed_rpm * 1000.0).round() as i64;
