@@ -229,9 +229,20 @@ pub fn check_source(
     recorded: impl IntoIterator<Item = TraceEvent>,
     spec: &CheckSpec,
 ) -> Report {
+    check_surveyed(source, survey::Skeleton::of(source), recorded, spec)
+}
+
+/// As [`check_source`], the first pass over the reference (`skeleton`, [`survey::Skeleton::of`])
+/// done already (to refuse a run that does not end before reading the recording).
+pub fn check_surveyed(
+    source: Source,
+    skeleton: survey::Skeleton,
+    recorded: impl IntoIterator<Item = TraceEvent>,
+    spec: &CheckSpec,
+) -> Report {
     match source {
         Source::Trace(t) => {
-            let r = reference::Reference::build(source, window::Feed::Trace(t.events.iter()));
+            let r = reference::Reference::build_from(source, skeleton, window::Feed::Trace(t.events.iter()));
             compare(r, recorded, spec)
         }
         Source::Run(run) => std::thread::scope(|sc| {
@@ -241,7 +252,7 @@ pub fn check_source(
                 run(&mut sink as &mut dyn TraceSink);
                 sink.flush();
             });
-            let r = reference::Reference::build(source, window::Feed::Channel(rx));
+            let r = reference::Reference::build_from(source, skeleton, window::Feed::Channel(rx));
             compare(r, recorded, spec)
         }),
     }

@@ -221,6 +221,11 @@ impl<'a> Reference<'a> {
     pub(crate) fn build(source: Source<'a>, feed: Feed<'a>) -> Reference<'a> {
         let mut sk = Skeleton::default();
         source.replay(&mut sk);
+        Reference::build_from(source, sk, feed)
+    }
+
+    /// As [`Reference::build`], its first pass `sk` done already ([`Skeleton::of`]).
+    pub(crate) fn build_from(source: Source<'a>, mut sk: Skeleton, feed: Feed<'a>) -> Reference<'a> {
         let tap = sk.tap();
         let trace = sk.trace();
         let mut phases = Vec::new();

@@ -88,6 +88,21 @@ impl TraceSink for Skeleton {
 }
 
 impl Skeleton {
+    /// The first pass over `source`.
+    pub fn of(source: Source) -> Skeleton {
+        let mut sk = Skeleton::default();
+        source.replay(&mut sk);
+        sk
+    }
+
+    /// The end of the run (None: it has none).
+    pub fn end(&self) -> Option<&nc_engine::trace::EndSummary> {
+        match self.events.last().map(|e| &e.event) {
+            Some(Event::End(s)) => Some(s),
+            _ => None,
+        }
+    }
+
     /// The discrete events as a trace (its last event the end).
     pub fn trace(&mut self) -> Trace {
         Trace {

@@ -107,9 +107,9 @@ const MAX_RECORDED_EVENTS: usize = 1_000_000;
 /// The most discrete events (every event but the samples) of a reference run.
 const MAX_REFERENCE_EVENTS: usize = 1_000_000;
 
-/// The most samples of a reference run (about 28 hours at 1 ms): a program that never ends
+/// The most samples of a reference run (10 hours at 1 ms): a program that never ends
 /// (a slow feed) is refused, not replayed for days.
-const MAX_REFERENCE_SAMPLES: usize = 100_000_000;
+const MAX_REFERENCE_SAMPLES: usize = 36_000_000;
 
 /// A sink passing a run on that stops it at [`MAX_REFERENCE_EVENTS`] discrete events or
 /// [`MAX_REFERENCE_SAMPLES`] samples (the same place in every replay).
@@ -183,6 +183,18 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         machine.run(&program, &run_opts, &mut Capped { inner: sink, discrete: 0, samples: 0 });
     };
     let source = check::Source::Run(&run);
+    let skeleton = check::survey::Skeleton::of(source);
+    if skeleton.end().is_some_and(|e| e.reason == EndReason::OutputLimit) {
+        let secs = skeleton.end_us as f64 / 1e6;
+        let mut e = InputError::new(
+            &input_name,
+            format!(
+                "the reference run of the program did not end within {MAX_REFERENCE_EVENTS} trace events and {MAX_REFERENCE_SAMPLES} samples ({secs} s of machine time)"
+            ),
+        );
+        e.expected = Some("a program that ends (check compares whole runs)".into());
+        return Err(e);
+    }
     let tolerances = match args.tolerances.as_ref().or(tol_default.as_ref()) {
         Some(p) => load_tolerances(p)?,
         None => Tolerances::default(),
@@ -266,21 +278,15 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     });
     let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
     let mut progress = super::progress::Progress::new("check");
-    let mut rep = check::check_source(source, stream.inspect(|e: &TraceEvent| progress.tick(e.t_us)), &spec);
+    let mut rep = check::check_surveyed(
+        source,
+        skeleton,
+        stream.inspect(|e: &TraceEvent| progress.tick(e.t_us)),
+        &spec,
+    );
     progress.done();
     if let Some(e) = failure {
         return Err(import_error(&e));
-    }
-    if rep.reference.end().is_some_and(|e| e.reason == EndReason::OutputLimit) {
-        let secs = rep.reference.events.last().map_or(0, |e| e.t_us) as f64 / 1e6;
-        let mut e = InputError::new(
-            &input_name,
-            format!(
-                "the reference run of the program did not end within {MAX_REFERENCE_EVENTS} trace events or {MAX_REFERENCE_SAMPLES} samples ({secs} s of machine time)"
-            ),
-        );
-        e.expected = Some("a program that ends (check compares whole runs)".into());
-        return Err(e);
     }
     // The reports show the samples around the divergences (and the HTML page one per bucket of
     // the whole run): the reference is replayed and, when the compact copy could not keep every
