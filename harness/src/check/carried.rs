@@ -170,10 +170,10 @@ fn names(keys: impl Iterator<Item = Key>) -> (String, usize) {
 /// What the recording cannot carry, known before it is read: functions, alarms, the envelope of
 /// axes it does not record, the synchronisation error without a spindle angle, the final speed
 /// without a spindle speed.
-pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
+pub(super) fn left_out(r: &Reference, skeleton: &nc_engine::trace::Trace, c: &Carried) -> Vec<NotComparable> {
     let src = &c.source;
     let mut out = Vec::new();
-    let keys = || r.trace.events.iter().filter_map(|e| Key::of(&e.event));
+    let keys = || skeleton.events.iter().filter_map(|e| Key::of(&e.event));
     if !c.functions {
         let (what, n) = names(keys().filter(|k| matches!(k, Key::Function(..))));
         if n > 0 {
@@ -245,7 +245,7 @@ pub(super) fn judge_missing_edges(c: &mut Comparator) {
             continue;
         }
         if c.carried.sampled {
-            let edges: Vec<(u64, bool)> = c.r.trace.edges(s).collect();
+            let edges: Vec<(u64, bool)> = c.r.edges(s);
             let i = edges.iter().position(|&(t, x)| t as i64 == *tr && x == v);
             let pulse = i.is_some_and(|i| {
                 let near = |j: usize| {

@@ -18,6 +18,10 @@ use crate::scenario::timeline::{fixed, ms};
 /// kept: memory does not follow the recording's length).
 pub const MAX_COMPACT_SAMPLES: usize = 20_000;
 
+/// Recorded events other than samples kept in the compact copy when no temporal rule runs on it,
+/// at most.
+pub const MAX_COMPACT_EVENTS: usize = 20_000;
+
 /// Recorded events buffered while looking for the anchor, at most.
 const MAX_PENDING: usize = 2_000_000;
 
@@ -84,6 +88,7 @@ pub struct Comparator<'r, 'a> {
     per_check: std::collections::BTreeMap<String, usize>,
     compact: Vec<TraceEvent>,
     had_phases: bool,
+    keep_all: bool,
     had_blocks: bool,
     had_functions: bool,
     last_kept: Option<i64>,
@@ -132,7 +137,15 @@ pub struct Comparator<'r, 'a> {
 
 impl<'r, 'a> Comparator<'r, 'a> {
     /// A comparator against `r`.
-    pub fn new(r: &'r Reference<'a>, tol: Tolerances, anchor: Anchor, scenario_rules: Vec<String>) -> Self {
+    /// A comparator against `r`; `skeleton` is the reference's discrete events (`r.trace`, or
+    /// what it held before [`Reference::slim`]), read here only.
+    pub fn new(
+        r: &'r Reference<'a>,
+        skeleton: &Trace,
+        tol: Tolerances,
+        anchor: Anchor,
+        scenario_rules: Vec<String>,
+    ) -> Self {
         let threshold = mm_nm(tol.position_mm);
         let rpm_threshold = (tol.speed_rpm.max(0.001) * 1000.0).round() as i64;
         let watch = match anchor {
@@ -148,7 +161,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
         let ref_anchor = match &anchor {
             Anchor::Offset(_) => None,
             Anchor::TapMotion | Anchor::SpindleStart => watch.and_then(|(w, th)| r.first_change(w, th)),
-            a => r.trace.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
+            a => skeleton.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
         };
         let offset = match anchor {
             Anchor::Offset(o) => Some(o),
@@ -166,7 +179,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             anchor,
             offset,
             pending: Vec::new(),
-            matcher: Some(Matcher::new(&r.trace)),
+            matcher: Some(Matcher::new(skeleton)),
             matched: 0,
             keys: KeyTracker::new(r.tap),
             findings: Vec::new(),
@@ -183,6 +196,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             per_check: Default::default(),
             compact: Vec::new(),
             had_phases: false,
+            keep_all: true,
             had_blocks: false,
             had_functions: false,
             last_kept: None,
@@ -209,20 +223,21 @@ impl<'r, 'a> Comparator<'r, 'a> {
             motion,
             marks: Vec::new(),
             handshake: Default::default(),
-            ref_handshake: super::handshake::faults_of(&r.trace),
+            ref_handshake: super::handshake::faults_of(skeleton),
         }
     }
 
     /// Compares only what `carried` says the recording can show; the reference events it
     /// cannot (functions, alarms) are counted as not comparable.
-    pub fn carrying(mut self, carried: Carried) -> Self {
+    pub fn carrying(mut self, carried: Carried, skeleton: &Trace) -> Self {
         let keep = |k: &Key| match k {
             Key::Function(..) => carried.functions,
             Key::Alarm(_) => carried.alarms,
             Key::Edge(..) => true,
         };
-        self.matcher = Some(Matcher::new_filtered(&self.r.trace, keep));
-        self.not_comparable = super::carried::left_out(self.r, &carried);
+        self.matcher = None; // one matcher in memory at a time
+        self.matcher = Some(Matcher::new_filtered(skeleton, keep));
+        self.not_comparable = super::carried::left_out(self.r, skeleton, &carried);
         self.carried = carried;
         self
     }
@@ -445,8 +460,16 @@ impl<'r, 'a> Comparator<'r, 'a> {
         }
     }
 
+    /// Keeps every discrete event of the recording in the compact copy (the scenario's temporal
+    /// rules run on it); without rules, only the first [`MAX_COMPACT_EVENTS`] (for the reports'
+    /// diagrams, completed around the divergences by [`super::excerpt`]).
+    pub fn keeping_all(mut self, all: bool) -> Self {
+        self.keep_all = all;
+        self
+    }
+
     fn keep(&mut self, t: i64, ev: &TraceEvent) {
-        let cap = 4 * self.r.total_events.max(10_000);
+        let cap = if self.keep_all { 4 * self.r.total_events.max(10_000) } else { MAX_COMPACT_EVENTS };
         if t >= 0 && self.compact.len() < cap {
             self.compact.push(TraceEvent { t_us: t as u64, event: ev.event.clone() });
         }
@@ -770,7 +793,8 @@ impl<'r, 'a> Comparator<'r, 'a> {
             _ => false,
         };
         let mut prev = 0;
-        for e in self.r.trace.events.iter().filter(|e| want(&e.event)) {
+        let room = if self.keep_all { usize::MAX } else { MAX_COMPACT_EVENTS.saturating_sub(events.len()) };
+        for e in self.r.trace.events.iter().filter(|e| want(&e.event)).take(room) {
             let t = e.t_us as i64;
             let k = self.marks.partition_point(|m| m.0 < t);
             let at = match self.marks.get(k) {

@@ -65,8 +65,8 @@ impl TraceSink for Keep<'_> {
     }
 }
 
-/// Adds to the compact recorded trace of `rep` the recorded samples within `windows` (reference
-/// time) that it does not hold: `recorded` is the recording read again (time as recorded, in
+/// Adds to the compact recorded trace of `rep` the recorded events within `windows` (reference
+/// time) later than those it holds (it keeps the first ones only): `recorded` is the recording read again (time as recorded, in
 /// order), aligned with the report's offset.
 pub fn fill_recorded(
     rep: &mut Report,

@@ -242,7 +242,12 @@ pub fn check_surveyed(
 ) -> Report {
     match source {
         Source::Trace(t) => {
-            let r = reference::Reference::build_from(source, skeleton, window::Feed::Trace(t.events.iter()));
+            let r = reference::Reference::build_from(
+                source,
+                skeleton,
+                window::Feed::Trace(t.events.iter()),
+                spec.expect.is_some(),
+            );
             compare(r, recorded, spec)
         }
         Source::Run(run) => std::thread::scope(|sc| {
@@ -252,21 +257,34 @@ pub fn check_surveyed(
                 run(&mut sink as &mut dyn TraceSink);
                 sink.flush();
             });
-            let r = reference::Reference::build_from(source, skeleton, window::Feed::Channel(rx));
+            let r = reference::Reference::build_from(
+                source,
+                skeleton,
+                window::Feed::Channel(rx),
+                spec.expect.is_some(),
+            );
             compare(r, recorded, spec)
         }),
     }
 }
 
 fn compare(
-    r: reference::Reference,
+    mut r: reference::Reference,
     recorded: impl IntoIterator<Item = TraceEvent>,
     spec: &CheckSpec,
 ) -> Report {
     let started = std::time::Instant::now();
     let anchor = spec.anchor.clone().unwrap_or_else(|| spec.carried.default_anchor(&r));
-    let mut c = compare::Comparator::new(&r, spec.tolerances.clone(), anchor.clone(), spec.rules.clone())
-        .carrying(spec.carried.clone());
+    let totals = compare_totals(&r.trace);
+    // Without temporal rules the reference's discrete events are read once, here, then dropped.
+    let keep_all = spec.expect.is_some();
+    let full = if keep_all { None } else { Some(r.slim()) };
+    let skeleton = full.as_ref().unwrap_or(&r.trace);
+    let mut c =
+        compare::Comparator::new(&r, skeleton, spec.tolerances.clone(), anchor.clone(), spec.rules.clone())
+            .carrying(spec.carried.clone(), skeleton)
+            .keeping_all(keep_all);
+    drop(full);
     for ev in recorded {
         c.event(ev);
     }
@@ -303,7 +321,7 @@ fn compare(
     let figures = Figures {
         recorded_events: c.events_seen,
         recorded_samples: c.samples_seen,
-        reference_events: compare_totals(&r.trace),
+        reference_events: totals,
         matched_events: 0,
         max_sync_error_mm: c.max_sync_nm / 1e6,
         sync_samples: c.sync_samples,
@@ -329,7 +347,6 @@ fn compare(
         seconds: started.elapsed().as_secs_f64(),
     };
     drop(c);
-    let mut r = r;
     Report { reference: std::mem::replace(&mut r.trace, report.reference.clone()), ..report }
 }
 

@@ -56,6 +56,8 @@ pub struct Reference<'a> {
     pub spindle_turns: bool,
     /// Each axis moves at some sample.
     pub moves: [bool; AXES],
+    /// [`Reference::slim`] dropped the discrete events.
+    pub slimmed: bool,
 }
 
 impl std::fmt::Debug for Reference<'_> {
@@ -221,13 +223,21 @@ impl<'a> Reference<'a> {
     pub(crate) fn build(source: Source<'a>, feed: Feed<'a>) -> Reference<'a> {
         let mut sk = Skeleton::default();
         source.replay(&mut sk);
-        Reference::build_from(source, sk, feed)
+        Reference::build_from(source, sk, feed, true)
     }
 
-    /// As [`Reference::build`], its first pass `sk` done already ([`Skeleton::of`]).
-    pub(crate) fn build_from(source: Source<'a>, mut sk: Skeleton, feed: Feed<'a>) -> Reference<'a> {
+    /// As [`Reference::build`], its first pass `sk` done already ([`Skeleton::of`]); without
+    /// `keep_all`, [`Reference::trace`] keeps only the events the comparison matches (edges,
+    /// functions, alarms, the end), not the phases, blocks and inputs (which the scenario's
+    /// temporal rules need).
+    pub(crate) fn build_from(
+        source: Source<'a>,
+        mut sk: Skeleton,
+        feed: Feed<'a>,
+        keep_all: bool,
+    ) -> Reference<'a> {
         let tap = sk.tap();
-        let trace = sk.trace();
+        let mut trace = sk.trace();
         let mut phases = Vec::new();
         let mut inputs = Vec::new();
         for e in &trace.events {
@@ -238,6 +248,14 @@ impl<'a> Reference<'a> {
             }
         }
         let plan = super::sync::plan(&trace, sk.end_us);
+        if !keep_all {
+            // Phases, blocks and inputs are read (plan, phases, inputs): only the scenario's
+            // temporal rules need them again.
+            trace
+                .events
+                .retain(|e| !matches!(e.event, Event::Phase(_) | Event::Block { .. } | Event::Input { .. }));
+            trace.events.shrink_to_fit();
+        }
         let mut sv = Survey::new(tap, plan.spans.clone(), plan.lead.clone(), &trace.meta.axes);
         source.replay(&mut sv);
         let (keys, spans, parts) = sv.finish();
@@ -256,7 +274,44 @@ impl<'a> Reference<'a> {
             last_sample_t: sk.last_sample_t,
             spindle_turns: sk.spindle_turns,
             moves: sk.moves,
+            slimmed: false,
         }
+    }
+
+    /// Drops the discrete events from [`Reference::trace`] (its end stays) and returns them:
+    /// memory no longer follows the number of holes. [`Reference::edges`] replays the run for
+    /// them when needed.
+    pub fn slim(&mut self) -> Trace {
+        let end: Vec<TraceEvent> = self
+            .trace
+            .events
+            .last()
+            .filter(|e| matches!(e.event, Event::End(_)))
+            .cloned()
+            .into_iter()
+            .collect();
+        self.slimmed = true;
+        Trace { meta: self.trace.meta.clone(), events: std::mem::replace(&mut self.trace.events, end) }
+    }
+
+    /// The edges of `s` in the reference (replayed when [`Reference::slim`] dropped them).
+    pub fn edges(&self, s: Signal) -> Vec<(u64, bool)> {
+        if !self.slimmed {
+            return self.trace.edges(s).collect();
+        }
+        struct Edges(Signal, Vec<(u64, bool)>);
+        impl TraceSink for Edges {
+            fn event(&mut self, ev: &TraceEvent) {
+                if let Event::Signal { signal, value } = ev.event {
+                    if signal == self.0 {
+                        self.1.push((ev.t_us, value));
+                    }
+                }
+            }
+        }
+        let mut e = Edges(s, Vec::new());
+        self.source.replay(&mut e);
+        e.1
     }
 
     /// Nothing before `floor` will be looked up any more: the samples before it may go.

@@ -105,6 +105,7 @@ impl Skeleton {
 
     /// The discrete events as a trace (its last event the end).
     pub fn trace(&mut self) -> Trace {
+        self.events.shrink_to_fit();
         Trace {
             meta: self.meta.clone().unwrap_or(TraceMeta {
                 dialect: "",

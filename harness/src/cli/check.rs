@@ -299,8 +299,10 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     } else {
         check::excerpt::reference(source, &windows, if args.html.is_some() { bucket } else { i64::MAX })
     };
-    let kept = rep.recorded.events.iter().filter(|e| matches!(e.event, Event::Sample(_))).count();
-    if !windows.is_empty() && kept >= check::compare::MAX_COMPACT_SAMPLES {
+    let samples = rep.recorded.events.iter().filter(|e| matches!(e.event, Event::Sample(_))).count();
+    let full = samples >= check::compare::MAX_COMPACT_SAMPLES
+        || rep.recorded.events.len() - samples >= check::compare::MAX_COMPACT_EVENTS;
+    if !windows.is_empty() && full {
         if let Ok(again) = import::open(&args.trace, &opts) {
             check::excerpt::fill_recorded(&mut rep, &windows, again.map_while(Result::ok));
         }
