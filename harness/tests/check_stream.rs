@@ -87,7 +87,11 @@ fn a_long_recording_finds_what_a_short_one_finds_in_a_window_that_does_not_grow(
         assert!(r.reference_samples_held <= 2 * 4096 + 2048, "held {}", r.reference_samples_held);
     }
     let samples = t2.samples().count();
-    assert!(long_rep.reference_samples_held * 10 < samples, "{} of {samples}", long_rep.reference_samples_held);
+    assert!(
+        long_rep.reference_samples_held * 10 < samples,
+        "{} of {samples}",
+        long_rep.reference_samples_held
+    );
     // The compact copy and the plot are bounded.
     assert!(long_rep.recorded.events.len() <= 2 * check::compare::MAX_COMPACT_EVENTS + 1);
     assert!(long_rep.series.len() <= 2 * 1600, "{}", long_rep.series.len());
