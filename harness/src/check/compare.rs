@@ -102,6 +102,10 @@ pub struct Comparator<'r, 'a> {
     /// How far back in reference time the comparison still looks (µs).
     floor_us: i64,
     compact_samples: usize,
+    /// The envelope's half width (µs), its tolerance (nm) and the axes it compares.
+    env_w: i64,
+    env_tol: f64,
+    env_slots: Vec<usize>,
     /// Recorded events and samples seen.
     pub events_seen: u64,
     /// Recorded samples seen.
@@ -169,6 +173,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
         };
         let bucket_us = (r.end_us / 750).max(1000);
         let floor_us = ms_us(tol.envelope_ms.max(tol.event_ms)) + 1;
+        let (env_w, env_tol) = (ms_us(tol.envelope_ms), mm_nm(tol.position_mm) as f64);
         Comparator {
             r,
             tol,
@@ -207,6 +212,9 @@ impl<'r, 'a> Comparator<'r, 'a> {
             bucket: None,
             floor_us,
             compact_samples: 0,
+            env_w,
+            env_tol,
+            env_slots: r.axes().iter().map(|a| a.index).collect(),
             events_seen: 0,
             samples_seen: 0,
             max_sync_nm: 0.0,
@@ -238,6 +246,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
         self.matcher = None; // one matcher in memory at a time
         self.matcher = Some(Matcher::new_filtered(skeleton, keep));
         self.not_comparable = super::carried::left_out(self.r, skeleton, &carried);
+        self.env_slots = self.r.axes().iter().map(|a| a.index).filter(|&k| carried.axis(k)).collect();
         self.carried = carried;
         self
     }
@@ -584,7 +593,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             self.sync_win = Some((k, None));
             self.cur_sync = None;
         }
-        let slack = ms_us(self.tol.event_ms.max(self.tol.envelope_ms));
+        let slack = self.floor_us - 1;
         let still = (mm_nm(self.tol.sync_mm) / 2).max(2000);
         let Some(e) = super::sync::error_at(r, &w, t, s.axes[w.slot], s.spindle_mdeg, slack, still) else {
             return;
@@ -639,12 +648,11 @@ impl<'r, 'a> Comparator<'r, 'a> {
         if t < 0 {
             return;
         }
-        let w = ms_us(self.tol.envelope_ms);
-        let tol = mm_nm(self.tol.position_mm) as f64;
+        let w = self.env_w;
+        let tol = self.env_tol;
         // `r` outlives `self`'s borrow: no copy of the axes per recorded sample.
         let r = self.r;
-        let Some((los, his)) = r.range_all(t - w, t + w) else { return };
-        let at = if t <= r.end_us { r.pos_all(t) } else { None };
+        let Some((los, his, at)) = r.envelope(t, w, &self.env_slots, t <= r.end_us) else { return };
         for (k, a) in r.axes().iter().enumerate() {
             if !self.carried.axis(a.index) {
                 continue;

@@ -419,6 +419,64 @@ impl<'a> Reference<'a> {
         Some((lo, hi))
     }
 
+    /// The position envelope at `t` of the axes `slots` marks: each one's range (min, max) over
+    /// [t − w, t + w], ends interpolated, and (with `at_too`) its position at `t`; exactly as
+    /// [`Reference::range_all`] and [`Reference::pos_all`] (the other axes are 0), in one pass.
+    #[allow(clippy::type_complexity)]
+    pub fn envelope(
+        &self,
+        t: i64,
+        w: i64,
+        slots: &[usize],
+        at_too: bool,
+    ) -> Option<([f64; AXES], [f64; AXES], Option<[f64; AXES]>)> {
+        let mut win = self.win.borrow_mut();
+        let (t0, t1) = (t - w, t + w);
+        win.ensure(t1.max(t0));
+        if win.s.is_empty() {
+            return None;
+        }
+        let i0 = win.first_at_or_after(t0);
+        let i1 = win.first_after(t1);
+        let n = win.t.len();
+        // The last sample at or before a time from the first after it (the first sample when
+        // none), and the value there.
+        let last_le = |first_after: usize| first_after.checked_sub(1).unwrap_or(0);
+        let value = |i: usize, x: i64, k: usize| -> f64 {
+            let v0 = win.s[i].axes[k] as f64;
+            if i + 1 < n && win.t[i] <= x {
+                let f = (x - win.t[i]) as f64 / (win.t[i + 1] - win.t[i]).max(1) as f64;
+                v0 + (win.s[i + 1].axes[k] as f64 - v0) * f
+            } else {
+                v0
+            }
+        };
+        let ia = last_le(if i0 < n && win.t[i0] == t0 { i0 + 1 } else { i0 });
+        let ib = last_le(i1);
+        let it = if at_too {
+            let lo = i0.min(n);
+            Some(last_le(lo + win.t[lo..i1.max(lo)].partition_point(|&x| x <= t)))
+        } else {
+            None
+        };
+        let (mut lo, mut hi, mut at) = ([0.0; AXES], [0.0; AXES], [0.0; AXES]);
+        for &k in slots {
+            let (a, b) = (value(ia, t0, k), value(ib, t1, k));
+            let (mut l, mut h) = (a.min(b), a.max(b));
+            for s in &win.s[i0..i1.max(i0)] {
+                let v = s.axes[k] as f64;
+                l = l.min(v);
+                h = h.max(v);
+            }
+            lo[k] = l;
+            hi[k] = h;
+            if let Some(i) = it {
+                at[k] = value(i, t, k);
+            }
+        }
+        Some((lo, hi, it.map(|_| at)))
+    }
+
     /// The range (min, max) of the spindle speed over the samples within [t0, t1], milli-rpm
     /// (None: no sample there).
     pub fn speed_range(&self, t0: i64, t1: i64) -> Option<(i64, i64)> {

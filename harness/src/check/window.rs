@@ -33,6 +33,8 @@ pub struct Window<'a> {
     pub cum: Vec<f64>,
     /// The index of the last lookup: recorded times mostly grow, so the next one starts there.
     pub hint: usize,
+    /// The last answers of [`Window::first_at_or_after`] and [`Window::first_after`].
+    hints: [usize; 2],
     feed: Feed<'a>,
     last: Option<(i64, Sample, f64)>,
     /// Most samples held at once (a figure for the memory bound).
@@ -42,7 +44,16 @@ pub struct Window<'a> {
 impl<'a> Window<'a> {
     /// A window fed by `feed`.
     pub(crate) fn new(feed: Feed<'a>) -> Window<'a> {
-        Window { t: Vec::new(), s: Vec::new(), cum: Vec::new(), hint: 0, feed, last: None, peak: 0 }
+        Window {
+            t: Vec::new(),
+            s: Vec::new(),
+            cum: Vec::new(),
+            hint: 0,
+            hints: [0; 2],
+            feed,
+            last: None,
+            peak: 0,
+        }
     }
 
     fn push(&mut self, t: i64, s: Sample) {
@@ -101,6 +112,9 @@ impl<'a> Window<'a> {
     /// Drops the samples before the last one at or before `floor` (nothing at or after `floor`
     /// is looked up any more). Amortised: the front is dropped once it is at least half.
     pub fn prune(&mut self, floor: i64) {
+        if self.t.len() < 8192 || self.t[4096] > floor {
+            return;
+        }
         let k = self.t.partition_point(|&x| x <= floor);
         let drop = k.saturating_sub(1);
         if drop >= 4096 && drop * 2 >= self.t.len() {
@@ -108,7 +122,26 @@ impl<'a> Window<'a> {
             self.s.drain(..drop);
             self.cum.drain(..drop);
             self.hint = self.hint.saturating_sub(drop);
+            for h in &mut self.hints {
+                *h = h.saturating_sub(drop);
+            }
         }
+    }
+
+    /// The index of the first sample at or after `t` (`t.partition_point(|x| x < t)`), found by
+    /// walking from the last answer: times looked up mostly grow.
+    pub fn first_at_or_after(&mut self, t: i64) -> usize {
+        let k = walk(&self.t, self.hints[0], |x| x < t);
+        self.hints[0] = k;
+        k
+    }
+
+    /// The index of the first sample after `t` (`t.partition_point(|x| x <= t)`), as
+    /// [`Window::first_at_or_after`].
+    pub fn first_after(&mut self, t: i64) -> usize {
+        let k = walk(&self.t, self.hints[1], |x| x <= t);
+        self.hints[1] = k;
+        k
     }
 }
 
@@ -149,4 +182,20 @@ impl TraceSink for ChannelSink {
     fn wants_stop(&self) -> bool {
         self.gone
     }
+}
+
+/// `v.partition_point(before)` found by walking from `from` (at most 64 steps, else a binary
+/// search).
+fn walk(v: &[i64], from: usize, before: impl Fn(i64) -> bool) -> usize {
+    let mut k = from.min(v.len());
+    for _ in 0..64 {
+        if k < v.len() && before(v[k]) {
+            k += 1;
+        } else if k > 0 && !before(v[k - 1]) {
+            k -= 1;
+        } else {
+            return k;
+        }
+    }
+    v.partition_point(|&x| before(x))
 }
