@@ -58,6 +58,8 @@ pub struct Reference<'a> {
     pub moves: [bool; AXES],
     /// [`Reference::slim`] dropped the discrete events.
     pub slimmed: bool,
+    /// The envelope's sliding extremes.
+    extremes: RefCell<Extremes>,
 }
 
 impl std::fmt::Debug for Reference<'_> {
@@ -124,6 +126,57 @@ impl MotionDetector {
         let target = p0 + self.threshold_nm * dev.signum();
         let f = (target - pp) as f64 / (p - pp) as f64;
         Some(tp + (f.clamp(0.0, 1.0) * (t - tp) as f64).round() as i64)
+    }
+}
+
+/// The least and greatest value of each axis over a window of sample indices that only moves
+/// forward (monotonic queues of indices in the whole run): the envelope's range at each recorded
+/// sample in constant time.
+#[derive(Default)]
+pub struct Extremes {
+    /// The window [from, to) of run indices the queues cover.
+    from: usize,
+    to: usize,
+    lo: [std::collections::VecDeque<usize>; AXES],
+    hi: [std::collections::VecDeque<usize>; AXES],
+}
+
+impl Extremes {
+    /// Moves the window to [g0, g1) over the samples of `w` for the axes `slots`.
+    fn slide(&mut self, w: &Window, g0: usize, g1: usize, slots: &[usize]) {
+        if g0 < self.from || g1 < self.to || g0 > self.to {
+            *self = Extremes { from: g0, to: g0, ..Extremes::default() };
+        }
+        let v = |g: usize, k: usize| w.s[g - w.base].axes[k];
+        for g in self.to..g1 {
+            for &k in slots {
+                let x = v(g, k);
+                while self.lo[k].back().is_some_and(|&b| v(b, k) >= x) {
+                    self.lo[k].pop_back();
+                }
+                self.lo[k].push_back(g);
+                while self.hi[k].back().is_some_and(|&b| v(b, k) <= x) {
+                    self.hi[k].pop_back();
+                }
+                self.hi[k].push_back(g);
+            }
+        }
+        for &k in slots {
+            while self.lo[k].front().is_some_and(|&f| f < g0) {
+                self.lo[k].pop_front();
+            }
+            while self.hi[k].front().is_some_and(|&f| f < g0) {
+                self.hi[k].pop_front();
+            }
+        }
+        self.from = g0;
+        self.to = g1;
+    }
+
+    /// The least and greatest value of axis `k` over the window (None: empty).
+    fn get(&self, w: &Window, k: usize) -> Option<(i64, i64)> {
+        let v = |g: usize| w.s[g - w.base].axes[k];
+        Some((v(*self.lo[k].front()?), v(*self.hi[k].front()?)))
     }
 }
 
@@ -275,6 +328,7 @@ impl<'a> Reference<'a> {
             spindle_turns: sk.spindle_turns,
             moves: sk.moves,
             slimmed: false,
+            extremes: RefCell::new(Extremes::default()),
         }
     }
 
@@ -441,7 +495,7 @@ impl<'a> Reference<'a> {
         let n = win.t.len();
         // The last sample at or before a time from the first after it (the first sample when
         // none), and the value there.
-        let last_le = |first_after: usize| first_after.checked_sub(1).unwrap_or(0);
+        let last_le = |first_after: usize| first_after.saturating_sub(1);
         let value = |i: usize, x: i64, k: usize| -> f64 {
             let v0 = win.s[i].axes[k] as f64;
             if i + 1 < n && win.t[i] <= x {
@@ -460,13 +514,14 @@ impl<'a> Reference<'a> {
             None
         };
         let (mut lo, mut hi, mut at) = ([0.0; AXES], [0.0; AXES], [0.0; AXES]);
+        let mut ex = self.extremes.borrow_mut();
+        ex.slide(&win, win.base + i0, win.base + i1.max(i0), slots);
         for &k in slots {
             let (a, b) = (value(ia, t0, k), value(ib, t1, k));
             let (mut l, mut h) = (a.min(b), a.max(b));
-            for s in &win.s[i0..i1.max(i0)] {
-                let v = s.axes[k] as f64;
-                l = l.min(v);
-                h = h.max(v);
+            if let Some((x, y)) = ex.get(&win, k) {
+                l = l.min(x as f64);
+                h = h.max(y as f64);
             }
             lo[k] = l;
             hi[k] = h;

@@ -35,6 +35,8 @@ pub struct Window<'a> {
     pub hint: usize,
     /// The last answers of [`Window::first_at_or_after`] and [`Window::first_after`].
     hints: [usize; 2],
+    /// Samples dropped so far: the index of `t[0]` in the whole run.
+    pub base: usize,
     feed: Feed<'a>,
     last: Option<(i64, Sample, f64)>,
     /// Most samples held at once (a figure for the memory bound).
@@ -50,6 +52,7 @@ impl<'a> Window<'a> {
             cum: Vec::new(),
             hint: 0,
             hints: [0; 2],
+            base: 0,
             feed,
             last: None,
             peak: 0,
@@ -121,6 +124,7 @@ impl<'a> Window<'a> {
             self.t.drain(..drop);
             self.s.drain(..drop);
             self.cum.drain(..drop);
+            self.base += drop;
             self.hint = self.hint.saturating_sub(drop);
             for h in &mut self.hints {
                 *h = h.saturating_sub(drop);
