@@ -16,57 +16,12 @@
 use std::io::Write;
 use std::time::Instant;
 
+use nc_conform::check::holes::{program as holes, Csv, MAP};
 use nc_conform::check::{self, Carried, CheckSpec, Source};
 use nc_conform::import::{self, ColumnMap, Options};
 use nc_conform::jsonl::JsonlWriter;
-use nc_engine::trace::{Event, Signal, Signals, TraceEvent, TraceMeta, TraceSink};
+use nc_engine::trace::TraceSink;
 use nc_engine::{Machine, RunOptions};
-
-const MAP: &str = "time: {column: t_us, unit: us}\naxes:\n  - {axis: X, column: X}\n  - {axis: Y, column: Y}\n  - {axis: Z, column: Z}\nspindle:\n  rpm: {column: S}\n  angle_deg: {column: A}\nsignals:\n  - {signal: F76.3, column: flags, bit: 0}\n  - {signal: RGTAP, column: flags, bit: 1}\n  - {signal: RGSPP, column: flags, bit: 2}\n  - {signal: RGSPM, column: flags, bit: 3}\n";
-
-const BITS: [Signal; 4] = [Signal::Rtap, Signal::Rgtap, Signal::Rgspp, Signal::Rgspm];
-
-fn holes(n: usize) -> String {
-    let mut p = String::from("G90 G00 X0 Y0 Z10\nM29 S2000\nG99 G84 X0 Y0 Z-5 R1 F3000\n");
-    for i in 1..n {
-        p.push_str(&format!("X{} Y{}\n", (i % 100) * 5, (i / 100) * 5));
-    }
-    p.push_str("G80\nM30\n");
-    p
-}
-
-/// Writes the CSV rows of a run: a row per sample with the signal levels then.
-struct Csv<W: Write> {
-    out: W,
-    sig: Signals,
-}
-
-impl<W: Write> TraceSink for Csv<W> {
-    fn start(&mut self, _meta: &TraceMeta) {
-        let _ = writeln!(self.out, "t_us,X,Y,Z,S,A,flags");
-    }
-    fn event(&mut self, ev: &TraceEvent) {
-        match &ev.event {
-            Event::Signal { signal, value } => self.sig.set(*signal, *value),
-            Event::Sample(s) => {
-                let flags: u32 = BITS.iter().enumerate().map(|(k, &b)| u32::from(self.sig.get(b)) << k).sum();
-                let mm = |v: i64| v as f64 / 1e6;
-                let _ = writeln!(
-                    self.out,
-                    "{},{},{},{},{},{},{}",
-                    ev.t_us,
-                    mm(s.axes[0]),
-                    mm(s.axes[1]),
-                    mm(s.axes[2]),
-                    s.spindle_mrpm as f64 / 1000.0,
-                    s.spindle_mdeg as f64 / 1000.0,
-                    flags
-                );
-            }
-            _ => {}
-        }
-    }
-}
 
 fn vm_hwm() -> String {
     std::fs::read_to_string("/proc/self/status")
@@ -95,7 +50,7 @@ fn main() {
                 1 << 20,
                 std::fs::File::create(format!("{base}.csv")).expect("creates"),
             );
-            let mut c = Csv { out: f, sig: Signals::default() };
+            let mut c = Csv::new(f);
             m.run(&p, &RunOptions::default(), &mut c);
             c.out.flush().expect("writes the CSV");
         }

@@ -19,6 +19,7 @@ pub mod compare;
 pub mod events;
 pub mod excerpt;
 pub mod handshake;
+pub mod holes;
 pub mod html;
 pub mod keypoints;
 pub mod keypoints_cmp;
