@@ -546,12 +546,19 @@ impl<'a> Reference<'a> {
     }
 
     /// Runs `f` on the samples of the window that covers [lo, hi] (times, samples, cumulative
-    /// spindle angles, milli-degrees), every sample in [lo, hi] included.
-    pub fn with_samples<R>(&self, lo: i64, hi: i64, f: impl FnOnce(&[i64], &[Sample], &[f64]) -> R) -> R {
-        let _ = lo;
+    /// spindle angles, milli-degrees), every sample in [lo, hi] included, with the indices of
+    /// the first sample at or after `lo`, the first after `hi` and the first after `t`.
+    pub fn with_samples<R>(
+        &self,
+        lo: i64,
+        hi: i64,
+        t: i64,
+        f: impl FnOnce(&[i64], &[Sample], &[f64], [usize; 3]) -> R,
+    ) -> R {
         let mut w = self.win.borrow_mut();
         w.ensure(hi);
-        f(&w.t, &w.s, &w.cum)
+        let at = [w.first_at_or_after_in(2, lo), w.first_after_in(3, hi), w.first_after_in(4, t)];
+        f(&w.t, &w.s, &w.cum, at)
     }
 
     /// The phase in force at `t`.

@@ -322,9 +322,7 @@ pub fn error_at(
     if w.ends.iter().any(|&e| (pos as f64 - e).abs() <= still_nm as f64) {
         return None;
     }
-    r.with_samples(lo, hi, |rt, rs, rc| {
-        let i0 = rt.partition_point(|&x| x < lo);
-        let i1 = rt.partition_point(|&x| x <= hi);
+    r.with_samples(lo, hi, t, |rt, rs, rc, [i0, i1, after_t]| {
         // Segments outward from the one at `t`; the crossing nearest in time wins (both sides of a
         // ring are looked at before stopping).
         let seg = |i: usize| -> Option<(i64, usize, f64)> {
@@ -336,7 +334,7 @@ pub fn error_at(
             Some((rt[i] + (f * (rt[i + 1] - rt[i]) as f64) as i64, i, f))
         };
         let last = i1.saturating_sub(1);
-        let mid = rt.partition_point(|&x| x <= t).saturating_sub(1).clamp(i0, last.max(i0));
+        let mid = after_t.saturating_sub(1).clamp(i0, last.max(i0));
         let mut best: Option<(i64, usize, f64)> = None;
         for d in 0..=(last.saturating_sub(i0)) {
             for i in [mid.checked_add(d), mid.checked_sub(d + 1)].into_iter().flatten() {

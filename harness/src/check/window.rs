@@ -34,7 +34,7 @@ pub struct Window<'a> {
     /// The index of the last lookup: recorded times mostly grow, so the next one starts there.
     pub hint: usize,
     /// The last answers of [`Window::first_at_or_after`] and [`Window::first_after`].
-    hints: [usize; 2],
+    hints: [usize; 5],
     /// Samples dropped so far: the index of `t[0]` in the whole run.
     pub base: usize,
     feed: Feed<'a>,
@@ -51,7 +51,7 @@ impl<'a> Window<'a> {
             s: Vec::new(),
             cum: Vec::new(),
             hint: 0,
-            hints: [0; 2],
+            hints: [0; 5],
             base: 0,
             feed,
             last: None,
@@ -133,19 +133,30 @@ impl<'a> Window<'a> {
     }
 
     /// The index of the first sample at or after `t` (`t.partition_point(|x| x < t)`), found by
-    /// walking from the last answer: times looked up mostly grow.
-    pub fn first_at_or_after(&mut self, t: i64) -> usize {
-        let k = walk(&self.t, self.hints[0], |x| x < t);
-        self.hints[0] = k;
+    /// walking from the last answer of lookup `slot` (0..5, one per kind of time looked up):
+    /// times looked up mostly grow.
+    pub fn first_at_or_after_in(&mut self, slot: usize, t: i64) -> usize {
+        let k = walk(&self.t, self.hints[slot], |x| x < t);
+        self.hints[slot] = k;
         k
     }
 
     /// The index of the first sample after `t` (`t.partition_point(|x| x <= t)`), as
-    /// [`Window::first_at_or_after`].
-    pub fn first_after(&mut self, t: i64) -> usize {
-        let k = walk(&self.t, self.hints[1], |x| x <= t);
-        self.hints[1] = k;
+    /// [`Window::first_at_or_after_in`].
+    pub fn first_after_in(&mut self, slot: usize, t: i64) -> usize {
+        let k = walk(&self.t, self.hints[slot], |x| x <= t);
+        self.hints[slot] = k;
         k
+    }
+
+    /// [`Window::first_at_or_after_in`] of the envelope's start.
+    pub fn first_at_or_after(&mut self, t: i64) -> usize {
+        self.first_at_or_after_in(0, t)
+    }
+
+    /// [`Window::first_after_in`] of the envelope's end.
+    pub fn first_after(&mut self, t: i64) -> usize {
+        self.first_after_in(1, t)
     }
 }
 
