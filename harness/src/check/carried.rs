@@ -5,7 +5,7 @@
 //! default anchor falls back to an event the recording does carry (`docs/checking.md`,
 //! "What a recording carries").
 
-use nc_engine::trace::{Signal, Trace};
+use nc_engine::trace::Signal;
 use serde::Serialize;
 
 use super::compare::Comparator;
@@ -106,7 +106,9 @@ impl Carried {
     /// 5. the first spindle start (when it records the spindle speed and the reference turns it);
     /// 6. the first motion of the axis that moves first in the reference (a recorded one);
     /// 7. none: offset 0.
-    pub fn default_anchor(&self, reference: &Trace, tap_slot: Option<usize>) -> Anchor {
+    pub fn default_anchor(&self, r: &Reference) -> Anchor {
+        let reference = &r.trace;
+        let tap_slot = r.tap.map(|t| t.slot);
         let m29 = reference.functions().any(|(_, l, c)| l == 'M' && c == 29);
         let rises = |s: Signal| self.declares(s) && reference.edges(s).any(|(_, v)| v);
         if m29 && self.functions {
@@ -125,14 +127,10 @@ impl Carried {
         if tap_slot.is_some_and(|s| self.axis(s)) {
             return Anchor::TapMotion;
         }
-        if self.rpm && reference.samples().any(|(_, s)| s.spindle_mrpm != 0) {
+        if self.rpm && r.spindle_turns {
             return Anchor::SpindleStart;
         }
-        let moves = |slot: usize| {
-            let mut v = reference.samples().map(|(_, s)| s.axes[slot]);
-            v.next().is_some_and(|first| v.any(|x| x != first))
-        };
-        if reference.meta.axes.iter().any(|a| self.axis(a.index) && moves(a.index)) {
+        if reference.meta.axes.iter().any(|a| self.axis(a.index) && r.moves[a.index]) {
             return Anchor::TapMotion;
         }
         Anchor::Offset(0)
@@ -172,10 +170,10 @@ fn names(keys: impl Iterator<Item = Key>) -> (String, usize) {
 /// What the recording cannot carry, known before it is read: functions, alarms, the envelope of
 /// axes it does not record, the synchronisation error without a spindle angle, the final speed
 /// without a spindle speed.
-pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
+pub(super) fn left_out(r: &Reference, skeleton: &nc_engine::trace::Trace, c: &Carried) -> Vec<NotComparable> {
     let src = &c.source;
     let mut out = Vec::new();
-    let keys = || r.trace.events.iter().filter_map(|e| Key::of(&e.event));
+    let keys = || skeleton.events.iter().filter_map(|e| Key::of(&e.event));
     if !c.functions {
         let (what, n) = names(keys().filter(|k| matches!(k, Key::Function(..))));
         if n > 0 {
@@ -247,7 +245,7 @@ pub(super) fn judge_missing_edges(c: &mut Comparator) {
             continue;
         }
         if c.carried.sampled {
-            let edges: Vec<(u64, bool)> = c.r.trace.edges(s).collect();
+            let edges: Vec<(u64, bool)> = c.r.edges(s);
             let i = edges.iter().position(|&(t, x)| t as i64 == *tr && x == v);
             let pulse = i.is_some_and(|i| {
                 let near = |j: usize| {

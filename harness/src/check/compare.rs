@@ -12,7 +12,17 @@ use super::keypoints::KeyTracker;
 use super::reference::{MotionDetector, Reference, Watch};
 use super::tolerance::{attribute, mm_nm, ms_us, Anchor, Context, Tolerances, Topic};
 use super::{Divergence, Point, MAX_DIVERGENCES};
+
+mod motion;
 use crate::scenario::timeline::{fixed, ms};
+
+/// Recorded samples kept in the compact copy, at most (the rest are compared and plotted, not
+/// kept: memory does not follow the recording's length).
+pub const MAX_COMPACT_SAMPLES: usize = 20_000;
+
+/// Recorded events other than samples kept in the compact copy when no temporal rule runs on it,
+/// at most.
+pub const MAX_COMPACT_EVENTS: usize = 20_000;
 
 /// Recorded events buffered while looking for the anchor, at most.
 const MAX_PENDING: usize = 2_000_000;
@@ -45,8 +55,8 @@ impl Run {
 }
 
 /// Compares recorded events with the reference, one at a time.
-pub struct Comparator<'r> {
-    pub(super) r: &'r Reference<'r>,
+pub struct Comparator<'r, 'a> {
+    pub(super) r: &'r Reference<'a>,
     pub(super) tol: Tolerances,
     dialect: String,
     rules: Vec<String>,
@@ -80,6 +90,7 @@ pub struct Comparator<'r> {
     per_check: std::collections::BTreeMap<String, usize>,
     compact: Vec<TraceEvent>,
     had_phases: bool,
+    keep_all: bool,
     had_blocks: bool,
     had_functions: bool,
     last_kept: Option<i64>,
@@ -88,6 +99,15 @@ pub struct Comparator<'r> {
     /// Plot points of the recorded trace (one per bucket).
     pub series: Vec<Point>,
     bucket_us: i64,
+    /// The plot bucket being filled: its start, its points of least and greatest value.
+    bucket: Option<(i64, Point, Point)>,
+    /// How far back in reference time the comparison still looks (µs).
+    floor_us: i64,
+    compact_samples: usize,
+    /// The envelope's half width (µs), its tolerance (nm) and the axes it compares.
+    env_w: i64,
+    env_tol: f64,
+    env_slots: Vec<usize>,
     /// Recorded events and samples seen.
     pub events_seen: u64,
     /// Recorded samples seen.
@@ -121,9 +141,17 @@ pub struct Comparator<'r> {
     ref_handshake: Vec<super::handshake::Fault>,
 }
 
-impl<'r> Comparator<'r> {
+impl<'r, 'a> Comparator<'r, 'a> {
     /// A comparator against `r`.
-    pub fn new(r: &'r Reference<'r>, tol: Tolerances, anchor: Anchor, scenario_rules: Vec<String>) -> Self {
+    /// A comparator against `r`; `skeleton` is the reference's discrete events (`r.trace`, or
+    /// what it held before [`Reference::slim`]), read here only.
+    pub fn new(
+        r: &'r Reference<'a>,
+        skeleton: &Trace,
+        tol: Tolerances,
+        anchor: Anchor,
+        scenario_rules: Vec<String>,
+    ) -> Self {
         let threshold = mm_nm(tol.position_mm);
         let rpm_threshold = (tol.speed_rpm.max(0.001) * 1000.0).round() as i64;
         let watch = match anchor {
@@ -139,13 +167,15 @@ impl<'r> Comparator<'r> {
         let ref_anchor = match &anchor {
             Anchor::Offset(_) => None,
             Anchor::TapMotion | Anchor::SpindleStart => watch.and_then(|(w, th)| r.first_change(w, th)),
-            a => r.trace.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
+            a => skeleton.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
         };
         let offset = match anchor {
             Anchor::Offset(o) => Some(o),
             _ => None,
         };
-        let bucket_us = (r.end_us / 1500).max(1000);
+        let bucket_us = (r.end_us / 750).max(1000);
+        let floor_us = ms_us(tol.envelope_ms.max(tol.event_ms)) + 1;
+        let (env_w, env_tol) = (ms_us(tol.envelope_ms), mm_nm(tol.position_mm) as f64);
         Comparator {
             r,
             tol,
@@ -156,7 +186,7 @@ impl<'r> Comparator<'r> {
             anchor,
             offset,
             pending: Vec::new(),
-            matcher: Some(Matcher::new(r.trace)),
+            matcher: Some(Matcher::new(skeleton)),
             matched: 0,
             keys: KeyTracker::new(r.tap),
             findings: Vec::new(),
@@ -173,6 +203,7 @@ impl<'r> Comparator<'r> {
             per_check: Default::default(),
             compact: Vec::new(),
             had_phases: false,
+            keep_all: true,
             had_blocks: false,
             had_functions: false,
             last_kept: None,
@@ -180,6 +211,12 @@ impl<'r> Comparator<'r> {
             alarms: 0,
             series: Vec::new(),
             bucket_us,
+            bucket: None,
+            floor_us,
+            compact_samples: 0,
+            env_w,
+            env_tol,
+            env_slots: r.axes().iter().map(|a| a.index).collect(),
             events_seen: 0,
             samples_seen: 0,
             max_sync_nm: 0.0,
@@ -196,20 +233,22 @@ impl<'r> Comparator<'r> {
             motion,
             marks: Vec::new(),
             handshake: Default::default(),
-            ref_handshake: super::handshake::faults_of(r.trace),
+            ref_handshake: super::handshake::faults_of(skeleton),
         }
     }
 
     /// Compares only what `carried` says the recording can show; the reference events it
     /// cannot (functions, alarms) are counted as not comparable.
-    pub fn carrying(mut self, carried: Carried) -> Self {
+    pub fn carrying(mut self, carried: Carried, skeleton: &Trace) -> Self {
         let keep = |k: &Key| match k {
             Key::Function(..) => carried.functions,
             Key::Alarm(_) => carried.alarms,
             Key::Edge(..) => true,
         };
-        self.matcher = Some(Matcher::new_filtered(self.r.trace, keep));
-        self.not_comparable = super::carried::left_out(self.r, &carried);
+        self.matcher = None; // one matcher in memory at a time
+        self.matcher = Some(Matcher::new_filtered(skeleton, keep));
+        self.not_comparable = super::carried::left_out(self.r, skeleton, &carried);
+        self.env_slots = self.r.axes().iter().map(|a| a.index).filter(|&k| carried.axis(k)).collect();
         self.carried = carried;
         self
     }
@@ -343,6 +382,7 @@ impl<'r> Comparator<'r> {
         match &ev.event {
             Event::Sample(s) => {
                 self.samples_seen += 1;
+                self.r.forget_before(t - self.floor_us);
                 if t >= 0 && t <= self.r.end_us {
                     if let Some(p) = self.last_sample_t {
                         self.max_gap_us = self.max_gap_us.max(t - p);
@@ -354,14 +394,18 @@ impl<'r> Comparator<'r> {
                 self.envelope(t, s);
                 self.last_sample = Some((t, *s));
                 let period = (self.r.trace.meta.sample_us as i64).max(1000);
-                if t <= keep_until && t >= 0 && self.last_kept.is_none_or(|k| t - k >= period) {
+                if t <= keep_until
+                    && t >= 0
+                    && self.compact_samples < MAX_COMPACT_SAMPLES
+                    && self.last_kept.is_none_or(|k| t - k >= period)
+                {
                     self.last_kept = Some(t);
+                    self.compact_samples += 1;
                     self.compact.push(TraceEvent { t_us: t as u64, event: ev.event.clone() });
                 }
-                if t >= 0 && t <= keep_until && self.series.last().is_none_or(|p| t - p.t >= self.bucket_us) {
+                if t >= 0 && t <= keep_until {
                     let tap = self.r.tap.map(|tp| s.axes[tp.slot]);
-                    let err = self.cur_sync;
-                    self.series.push(Point { t, tap, rpm: s.spindle_mrpm, sync_nm: err });
+                    self.plot(Point { t, tap, rpm: s.spindle_mrpm, sync_nm: self.cur_sync });
                 }
             }
             Event::Signal { signal, value } => {
@@ -397,8 +441,46 @@ impl<'r> Comparator<'r> {
         }
     }
 
+    /// One plot point: each bucket of the series keeps its points of least and greatest tap
+    /// position (spindle speed without a tap), in time order.
+    fn plot(&mut self, p: Point) {
+        let v = |p: &Point| p.tap.unwrap_or(p.rpm);
+        match &mut self.bucket {
+            Some((b0, lo, hi)) if p.t - *b0 < self.bucket_us => {
+                if v(&p) < v(lo) {
+                    *lo = p;
+                }
+                if v(&p) > v(hi) {
+                    *hi = p;
+                }
+            }
+            _ => {
+                self.flush_plot();
+                self.bucket = Some((p.t, p, p));
+            }
+        }
+    }
+
+    fn flush_plot(&mut self) {
+        if let Some((_, lo, hi)) = self.bucket.take() {
+            let (a, b) = if lo.t <= hi.t { (lo, hi) } else { (hi, lo) };
+            self.series.push(a);
+            if b.t != a.t {
+                self.series.push(b);
+            }
+        }
+    }
+
+    /// Keeps every discrete event of the recording in the compact copy (the scenario's temporal
+    /// rules run on it); without rules, only the first [`MAX_COMPACT_EVENTS`] (for the reports'
+    /// diagrams, completed around the divergences by [`super::excerpt`]).
+    pub fn keeping_all(mut self, all: bool) -> Self {
+        self.keep_all = all;
+        self
+    }
+
     fn keep(&mut self, t: i64, ev: &TraceEvent) {
-        let cap = 4 * self.r.trace.events.len().max(10_000);
+        let cap = if self.keep_all { 4 * self.r.total_events.max(10_000) } else { MAX_COMPACT_EVENTS };
         if t >= 0 && self.compact.len() < cap {
             self.compact.push(TraceEvent { t_us: t as u64, event: ev.event.clone() });
         }
@@ -496,140 +578,6 @@ impl<'r> Comparator<'r> {
         self.carried.declares(s) || self.seen.get(s)
     }
 
-    fn sync(&mut self, t: i64, s: &Sample) {
-        let r = self.r;
-        let Some(k) = r.sync_index(t) else {
-            self.close_sync();
-            self.sync_win = None;
-            self.cur_sync = None;
-            return;
-        };
-        let w = r.sync[k];
-        if !self.carried.angle || !self.carried.axis(w.slot) {
-            return;
-        }
-        if self.sync_win.map(|x| x.0) != Some(k) {
-            self.close_sync();
-            self.sync_win = Some((k, None));
-            self.cur_sync = None;
-        }
-        let slack = ms_us(self.tol.event_ms.max(self.tol.envelope_ms));
-        let still = (mm_nm(self.tol.sync_mm) / 2).max(2000);
-        let Some(e) = super::sync::error_at(r, &w, t, s.axes[w.slot], s.spindle_mdeg, slack, still) else {
-            return;
-        };
-        self.sync_samples += 1;
-        let e0 = match &mut self.sync_win {
-            Some((_, e0)) => *e0.get_or_insert(e),
-            None => e,
-        };
-        let err = if w.locked { e } else { e - e0 };
-        self.cur_sync = Some(err);
-        self.max_sync_nm = self.max_sync_nm.max(err.abs());
-        let tol = mm_nm(self.tol.sync_mm) as f64;
-        if err.abs() > tol {
-            let excess = err.abs() - tol;
-            let run = self.sync_run.get_or_insert_with(|| Run::starting(t));
-            run.samples += 1;
-            if excess > run.excess {
-                let letter = r.axes().iter().find(|a| a.index == w.slot).map_or('?', |a| a.letter);
-                let what = if w.locked { "start angle and lead" } else { "lead" };
-                run.what =
-                    format!("{letter} synchronisation with the spindle, {} {} ({what})", w.kind.name(), w.n);
-                run.excess = excess;
-                run.t_worst = t;
-                run.expected = format!(
-                    "|{letter} − the reference's {letter} at the recorded spindle angle{}| <= {} mm",
-                    if w.locked { "" } else { ", drift since the move's start" },
-                    fixed(mm_nm(self.tol.sync_mm), 6)
-                );
-                run.actual = format!("{} mm at {}", fixed(err.round() as i64, 6), ms(t.max(0) as u64));
-            }
-        } else {
-            self.close_sync();
-        }
-    }
-
-    fn close_sync(&mut self) {
-        if let Some(run) = self.sync_run.take() {
-            self.diverge(
-                Topic::Sync,
-                "CHK-SYNC-01",
-                format!("{} ({} samples)", run.what, run.samples),
-                run.t_first,
-                run.expected,
-                run.actual,
-                format!("{} mm", fixed(run.excess.round() as i64, 6)),
-            );
-        }
-    }
-
-    fn envelope(&mut self, t: i64, s: &Sample) {
-        if t < 0 {
-            return;
-        }
-        let w = ms_us(self.tol.envelope_ms);
-        let tol = mm_nm(self.tol.position_mm) as f64;
-        // `r` outlives `self`'s borrow: no copy of the axes per recorded sample.
-        let r = self.r;
-        let Some((los, his)) = r.range_all(t - w, t + w) else { return };
-        let at = if t <= r.end_us { r.pos_all(t) } else { None };
-        for (k, a) in r.axes().iter().enumerate() {
-            if !self.carried.axis(a.index) {
-                continue;
-            }
-            let (lo, hi) = (los[a.index], his[a.index]);
-            let v = s.axes[a.index] as f64;
-            if let (Some(p), false) = (at, a.rotary) {
-                let p = p[a.index];
-                self.fit.0 += (v - p) * (v - p);
-                self.fit.1 += 1;
-            }
-            let excess = (lo - tol - v).max(v - hi - tol);
-            if excess > 0.0 {
-                self.max_env_nm = self.max_env_nm.max(excess);
-                let run = self.env_runs[k].get_or_insert_with(|| Run::starting(t));
-                run.samples += 1;
-                if excess > run.excess {
-                    run.excess = excess;
-                    run.t_worst = t;
-                    let unit = if a.rotary { "deg" } else { "mm" };
-                    run.expected = format!(
-                        "{} in [{}, {}] {unit} (reference ± {} ms ± {} mm)",
-                        a.letter,
-                        fixed(lo.round() as i64, 6),
-                        fixed(hi.round() as i64, 6),
-                        self.tol.envelope_ms,
-                        self.tol.position_mm
-                    );
-                    run.actual = format!("{} = {} {unit} at {}", a.letter, fixed(v as i64, 6), ms(t as u64));
-                }
-            } else {
-                self.close_env(k);
-            }
-        }
-    }
-
-    fn close_env(&mut self, k: usize) {
-        if let Some(run) = self.env_runs[k].take() {
-            let letter = self.r.axes()[k].letter;
-            // Attributed where the run starts, but an overload retract begun by its worst point
-            // counts: a late retract strays before the reference's retract phase begins.
-            let mut ctx = self.context(run.t_first);
-            ctx.overload |= self.r.overload_by(run.t_worst);
-            let rule = attribute(Topic::Envelope, &ctx);
-            self.push(Divergence {
-                rule,
-                check: "CHK-ENV-01".into(),
-                what: format!("{letter} position envelope ({} samples)", run.samples),
-                t_us: Some(run.t_first),
-                expected: run.expected,
-                actual: run.actual,
-                margin: format!("{} mm", fixed(run.excess.round() as i64, 6)),
-            });
-        }
-    }
-
     /// Ends the stream: open runs are closed, unmatched reference events reported, key points
     /// and the final state compared. Returns the compact recorded trace.
     pub fn finish(&mut self) -> (Trace, super::keypoints::KeyPoints) {
@@ -639,6 +587,7 @@ impl<'r> Comparator<'r> {
                 self.aligned(p);
             }
         }
+        self.flush_plot();
         let mut faults = Vec::new();
         std::mem::take(&mut self.handshake).finish(&mut faults);
         super::handshake::report(self, faults);
@@ -671,16 +620,14 @@ impl<'r> Comparator<'r> {
         // sample), over ± the event window: the two clocks are tied by an event recorded within
         // its window, so a spindle still ramping there may be anywhere in that range.
         let w = ms_us(self.tol.event_ms);
-        let speed = |x: i64| match self.r.t.last() {
-            Some(&tl) if x < tl => self.r.value_at(x, |q| q.spindle_mrpm).map_or(0, |v| v.round() as i64),
+        let speed = |x: i64| match self.r.last_sample_t {
+            Some(tl) if x < tl => self.r.value_at(x, |q| q.spindle_mrpm).map_or(0, |v| v.round() as i64),
             _ => end.state.spindle_mrpm,
         };
         let (mut lo, mut hi) = (speed(t - w).min(speed(t + w)), speed(t - w).max(speed(t + w)));
-        let i0 = self.r.t.partition_point(|&x| x < t - w);
-        let i1 = self.r.t.partition_point(|&x| x <= t + w);
-        for q in &self.r.s[i0..i1.max(i0)] {
-            lo = lo.min(q.spindle_mrpm);
-            hi = hi.max(q.spindle_mrpm);
+        if let Some((a, b)) = self.r.speed_range(t - w, t + w) {
+            lo = lo.min(a);
+            hi = hi.max(b);
         }
         let want = speed(t);
         let tol = (self.tol.speed_rpm * 1000.0).round() as i64;
@@ -723,7 +670,8 @@ impl<'r> Comparator<'r> {
             _ => false,
         };
         let mut prev = 0;
-        for e in self.r.trace.events.iter().filter(|e| want(&e.event)) {
+        let room = if self.keep_all { usize::MAX } else { MAX_COMPACT_EVENTS.saturating_sub(events.len()) };
+        for e in self.r.trace.events.iter().filter(|e| want(&e.event)).take(room) {
             let t = e.t_us as i64;
             let k = self.marks.partition_point(|m| m.0 < t);
             let at = match self.marks.get(k) {

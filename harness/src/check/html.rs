@@ -233,7 +233,9 @@ pub fn page(rep: &Report, reference: &Trace, title: &str) -> String {
     let bucket = (t1 / 1500).max(1000);
     let mut ref_pts = Vec::new();
     let mut last: Option<i64> = None;
-    for (t, s) in r.t.iter().zip(&r.s) {
+    let samples: Vec<(i64, nc_engine::trace::Sample)> =
+        reference.samples().map(|(t, s)| (t as i64, *s)).collect();
+    for (t, s) in &samples {
         if last.is_none_or(|l| t.saturating_sub(l) >= bucket) {
             ref_pts.push((*t, *s));
             last = Some(*t);
@@ -325,7 +327,7 @@ pub fn page(rep: &Report, reference: &Trace, title: &str) -> String {
         .collect();
     for (k, &(z0, z1)) in zooms.iter().take(8).enumerate() {
         let within = |t: i64| t >= z0 && t <= z1;
-        let refw: Vec<_> = r.t.iter().zip(&r.s).filter(|(t, _)| within(**t)).collect();
+        let refw: Vec<_> = samples.iter().filter(|(t, _)| within(*t)).map(|(t, s)| (t, s)).collect();
         let recw: Vec<_> = rec_samples.iter().filter(|(t, _)| within(*t)).collect();
         let zmarks: Vec<(i64, String)> = marks.iter().filter(|m| within(m.0)).cloned().collect();
         let slot = tap.map(|tp| tp.slot).or_else(|| r.furthest_axis(z0, z1));

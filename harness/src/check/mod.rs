@@ -17,21 +17,26 @@ pub mod calibrate;
 pub mod carried;
 pub mod compare;
 pub mod events;
+pub mod excerpt;
 pub mod handshake;
+pub mod holes;
 pub mod html;
 pub mod keypoints;
 pub mod keypoints_cmp;
 pub mod reference;
 pub mod report;
 pub mod shift;
+pub mod survey;
 pub mod sync;
 pub mod tolerance;
+pub mod window;
 
-use nc_engine::trace::{Signal, Trace, TraceEvent};
+use nc_engine::trace::{Signal, Trace, TraceEvent, TraceSink};
 use serde::Serialize;
 
 use crate::scenario::expect::{self, Expectations, Verdict};
 pub use carried::{Carried, NotComparable};
+pub use survey::Source;
 pub use tolerance::{Anchor, Tolerances};
 
 /// Most divergences listed one by one (the rest are counted).
@@ -143,9 +148,15 @@ pub struct Report {
     /// The compact recorded trace, aligned (for diagrams).
     #[serde(skip)]
     pub recorded: Trace,
-    /// Plot points of the recorded trace.
+    /// Plot points of the recorded trace (the least and the greatest of each time bucket).
     #[serde(skip)]
     pub series: Vec<Point>,
+    /// The reference's discrete events (every event but its samples), the end last.
+    #[serde(skip)]
+    pub reference: Trace,
+    /// Most reference samples held at once by the comparison.
+    #[serde(skip)]
+    pub reference_samples_held: usize,
     /// Wall time of the comparison, s (JUnit `time`).
     pub seconds: f64,
 }
@@ -207,12 +218,74 @@ pub fn default_anchor(reference: &Trace) -> Anchor {
 
 /// Compares the recorded events (time as recorded, in order) with `reference`.
 pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, spec: &CheckSpec) -> Report {
+    check_source(Source::Trace(reference), recorded, spec)
+}
+
+/// Compares the recorded events with the reference run `source`. A run (the engine) is replayed:
+/// twice to index it (its discrete events, tap, key points, synchronised moves), then once more
+/// on another thread, alongside the recorded stream, its samples held only around the recorded
+/// time: memory does not follow the length of the run or of the recording.
+pub fn check_source(
+    source: Source,
+    recorded: impl IntoIterator<Item = TraceEvent>,
+    spec: &CheckSpec,
+) -> Report {
+    check_surveyed(source, survey::Skeleton::of(source), recorded, spec)
+}
+
+/// As [`check_source`], the first pass over the reference (`skeleton`, [`survey::Skeleton::of`])
+/// done already (to refuse a run that does not end before reading the recording).
+pub fn check_surveyed(
+    source: Source,
+    skeleton: survey::Skeleton,
+    recorded: impl IntoIterator<Item = TraceEvent>,
+    spec: &CheckSpec,
+) -> Report {
+    match source {
+        Source::Trace(t) => {
+            let r = reference::Reference::build_from(
+                source,
+                skeleton,
+                window::Feed::Trace(t.events.iter()),
+                spec.expect.is_some(),
+            );
+            compare(r, recorded, spec)
+        }
+        Source::Run(run) => std::thread::scope(|sc| {
+            let (tx, rx) = std::sync::mpsc::sync_channel(4);
+            sc.spawn(move || {
+                let mut sink = window::ChannelSink::new(tx);
+                run(&mut sink as &mut dyn TraceSink);
+                sink.flush();
+            });
+            let r = reference::Reference::build_from(
+                source,
+                skeleton,
+                window::Feed::Channel(rx),
+                spec.expect.is_some(),
+            );
+            compare(r, recorded, spec)
+        }),
+    }
+}
+
+fn compare(
+    mut r: reference::Reference,
+    recorded: impl IntoIterator<Item = TraceEvent>,
+    spec: &CheckSpec,
+) -> Report {
     let started = std::time::Instant::now();
-    let r = reference::Reference::new(reference);
-    let anchor =
-        spec.anchor.clone().unwrap_or_else(|| spec.carried.default_anchor(reference, r.tap.map(|t| t.slot)));
-    let mut c = compare::Comparator::new(&r, spec.tolerances.clone(), anchor.clone(), spec.rules.clone())
-        .carrying(spec.carried.clone());
+    let anchor = spec.anchor.clone().unwrap_or_else(|| spec.carried.default_anchor(&r));
+    let totals = compare_totals(&r.trace);
+    // Without temporal rules the reference's discrete events are read once, here, then dropped.
+    let keep_all = spec.expect.is_some();
+    let full = if keep_all { None } else { Some(r.slim()) };
+    let skeleton = full.as_ref().unwrap_or(&r.trace);
+    let mut c =
+        compare::Comparator::new(&r, skeleton, spec.tolerances.clone(), anchor.clone(), spec.rules.clone())
+            .carrying(spec.carried.clone(), skeleton)
+            .keeping_all(keep_all);
+    drop(full);
     for ev in recorded {
         c.event(ev);
     }
@@ -249,7 +322,7 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
     let figures = Figures {
         recorded_events: c.events_seen,
         recorded_samples: c.samples_seen,
-        reference_events: compare_totals(reference),
+        reference_events: totals,
         matched_events: 0,
         max_sync_error_mm: c.max_sync_nm / 1e6,
         sync_samples: c.sync_samples,
@@ -258,7 +331,7 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
         fit_rms_mm: (c.fit.1 > 0).then(|| (c.fit.0 / c.fit.1 as f64).sqrt() / 1e6),
         fit_values: c.fit.1,
     };
-    Report {
+    let report = Report {
         divergences: std::mem::take(&mut c.divergences),
         omitted: c.omitted,
         omitted_by_check: std::mem::take(&mut c.omitted_by_check),
@@ -270,8 +343,12 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
         figures: Figures { matched_events: c.matched(), ..figures },
         recorded: compact,
         series: std::mem::take(&mut c.series),
+        reference: Trace { meta: r.trace.meta.clone(), events: Vec::new() },
+        reference_samples_held: r.win.borrow().peak,
         seconds: started.elapsed().as_secs_f64(),
-    }
+    };
+    drop(c);
+    Report { reference: std::mem::replace(&mut r.trace, report.reference.clone()), ..report }
 }
 
 fn compare_totals(reference: &Trace) -> usize {

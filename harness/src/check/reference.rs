@@ -1,10 +1,17 @@
-//! The reference side of a comparison, kept in memory: its samples for interpolation and
-//! envelopes, the tap axis and lead for the synchronisation error, its discrete events, phases
-//! and inputs for attribution.
+//! The reference side of a comparison: its discrete events (the skeleton), the tap axis and lead
+//! for the synchronisation error, its key points, phases and inputs for attribution, in memory;
+//! its samples through a sliding [`Window`] (pulled from the run as the comparison advances,
+//! dropped behind it), so that memory does not follow the run's length.
 
-use nc_engine::trace::{AxisSpec, Event, Phase, Sample, Signal, Signals, Trace, AXES};
+use std::cell::RefCell;
 
-use super::keypoints::{KeyPoints, KeyTracker};
+use nc_engine::trace::{
+    AxisSpec, Event, Phase, Sample, Signal, Trace, TraceEvent, TraceMeta, TraceSink, AXES,
+};
+
+use super::keypoints::KeyPoints;
+use super::survey::{Skeleton, Source, Survey};
+use super::window::{Feed, Window};
 
 /// The tapping axis and its lead, learned from the reference's strokes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,15 +28,14 @@ pub struct Tap {
     pub into_sign: i64,
 }
 
-/// The reference trace, indexed.
-#[derive(Debug)]
+/// The reference run, indexed.
 pub struct Reference<'a> {
-    /// The trace itself.
-    pub trace: &'a Trace,
-    /// Sample times.
-    pub t: Vec<i64>,
-    /// Samples, same order.
-    pub s: Vec<Sample>,
+    /// Its discrete events (every event but the samples), the end last.
+    pub trace: Trace,
+    /// The run, replayable.
+    pub source: Source<'a>,
+    /// Its samples around the comparison's time.
+    pub win: RefCell<Window<'a>>,
     /// The tap, if the reference taps with the spindle turning.
     pub tap: Option<Tap>,
     /// Key points of the reference.
@@ -40,13 +46,26 @@ pub struct Reference<'a> {
     pub phases: Vec<(i64, Phase)>,
     /// Inputs by time (name, value).
     pub inputs: Vec<(i64, String, String)>,
-    /// The cumulative unwrapped spindle angle at each sample, milli-degrees.
-    pub cum_mdeg: Vec<f64>,
     /// The synchronised moves (rigid strokes, thread passes, encoder-following moves).
     pub sync: Vec<super::sync::Window>,
-    /// The sample index of the last lookup: recorded times mostly grow, so the next lookup
-    /// starts there.
-    hint: std::cell::Cell<usize>,
+    /// Events of the run, samples included.
+    pub total_events: usize,
+    /// Time of its last sample.
+    pub last_sample_t: Option<i64>,
+    /// The spindle turns at some sample.
+    pub spindle_turns: bool,
+    /// Each axis moves at some sample.
+    pub moves: [bool; AXES],
+    /// [`Reference::slim`] dropped the discrete events.
+    pub slimmed: bool,
+    /// The envelope's sliding extremes.
+    extremes: RefCell<Extremes>,
+}
+
+impl std::fmt::Debug for Reference<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Reference").field("tap", &self.tap).field("end_us", &self.end_us).finish()
+    }
 }
 
 /// The change of a spindle angle from `a0` to `a1` (milli-degrees) over `dt_us`, unwrapped using
@@ -110,78 +129,261 @@ impl MotionDetector {
     }
 }
 
+/// The least and greatest value of each axis over a window of sample indices that only moves
+/// forward (monotonic queues of indices in the whole run): the envelope's range at each recorded
+/// sample in constant time.
+#[derive(Default)]
+pub struct Extremes {
+    /// The window [from, to) of run indices the queues cover.
+    from: usize,
+    to: usize,
+    lo: [std::collections::VecDeque<usize>; AXES],
+    hi: [std::collections::VecDeque<usize>; AXES],
+}
+
+impl Extremes {
+    /// Moves the window to [g0, g1) over the samples of `w` for the axes `slots`.
+    fn slide(&mut self, w: &Window, g0: usize, g1: usize, slots: &[usize]) {
+        if g0 < self.from || g1 < self.to || g0 > self.to {
+            *self = Extremes { from: g0, to: g0, ..Extremes::default() };
+        }
+        let v = |g: usize, k: usize| w.s[g - w.base].axes[k];
+        for g in self.to..g1 {
+            for &k in slots {
+                let x = v(g, k);
+                while self.lo[k].back().is_some_and(|&b| v(b, k) >= x) {
+                    self.lo[k].pop_back();
+                }
+                self.lo[k].push_back(g);
+                while self.hi[k].back().is_some_and(|&b| v(b, k) <= x) {
+                    self.hi[k].pop_back();
+                }
+                self.hi[k].push_back(g);
+            }
+        }
+        for &k in slots {
+            while self.lo[k].front().is_some_and(|&f| f < g0) {
+                self.lo[k].pop_front();
+            }
+            while self.hi[k].front().is_some_and(|&f| f < g0) {
+                self.hi[k].pop_front();
+            }
+        }
+        self.from = g0;
+        self.to = g1;
+    }
+
+    /// The least and greatest value of axis `k` over the window (None: empty).
+    fn get(&self, w: &Window, k: usize) -> Option<(i64, i64)> {
+        let v = |g: usize| w.s[g - w.base].axes[k];
+        Some((v(*self.lo[k].front()?), v(*self.hi[k].front()?)))
+    }
+}
+
+/// Stops a replay at the first crossing of each detector.
+struct Detectors {
+    d: Vec<(usize, MotionDetector, Option<i64>)>,
+}
+
+impl TraceSink for Detectors {
+    fn start(&mut self, _meta: &TraceMeta) {}
+    fn event(&mut self, ev: &TraceEvent) {
+        if let Event::Sample(s) = &ev.event {
+            for (_, d, hit) in self.d.iter_mut().filter(|x| x.2.is_none()) {
+                *hit = d.sample(ev.t_us as i64, s);
+            }
+        }
+    }
+    fn wants_stop(&self) -> bool {
+        self.d.iter().all(|x| x.2.is_some())
+    }
+}
+
+/// The index of the last sample at or before `t` in `w` (None before the first).
+fn idx_at(w: &mut Window, t: i64) -> Option<usize> {
+    let h = w.hint;
+    // The sample at or before `t`: the hint, or one of the next two, else a binary search.
+    for k in h..(h + 3).min(w.t.len()) {
+        if w.t[k] <= t && w.t.get(k + 1).is_none_or(|&n| n > t) {
+            w.hint = k;
+            return Some(k);
+        }
+    }
+    let k = w.t.partition_point(|&x| x <= t).checked_sub(1)?;
+    w.hint = k;
+    Some(k)
+}
+
+/// Every axis at `t` in `w`, interpolated (held after the last sample, the first before it).
+fn pos_all_in(w: &mut Window, t: i64) -> Option<[f64; AXES]> {
+    let i = idx_at(w, t).or(if w.s.is_empty() { None } else { Some(0) })?;
+    let a = &w.s[i];
+    let mut out = [0.0; AXES];
+    match w.s.get(i + 1) {
+        Some(n) if w.t[i] <= t => {
+            let f = (t - w.t[i]) as f64 / (w.t[i + 1] - w.t[i]).max(1) as f64;
+            for (k, o) in out.iter_mut().enumerate() {
+                let v0 = a.axes[k] as f64;
+                *o = v0 + (n.axes[k] as f64 - v0) * f;
+            }
+        }
+        _ => {
+            for (k, o) in out.iter_mut().enumerate() {
+                *o = a.axes[k] as f64;
+            }
+        }
+    }
+    Some(out)
+}
+
 impl<'a> Reference<'a> {
     /// The first motion of axis `slot` (see [`MotionDetector`]).
     pub fn first_motion(&self, slot: usize, threshold_nm: i64) -> Option<i64> {
         self.first_change(Watch::Axis(slot), threshold_nm)
     }
 
-    /// The first change of what `watch` watches beyond `threshold` (see [`MotionDetector`]).
+    /// The first change of what `watch` watches beyond `threshold` (see [`MotionDetector`]): a
+    /// replay of the run up to it.
     pub fn first_change(&self, watch: Watch, threshold: i64) -> Option<i64> {
-        let mut d = MotionDetector::watching(watch, threshold);
-        self.t.iter().zip(&self.s).find_map(|(&t, s)| d.sample(t, s))
+        let mut d = Detectors { d: vec![(0, MotionDetector::watching(watch, threshold), None)] };
+        self.source.replay(&mut d);
+        d.d[0].2
     }
 
     /// The axis (among those `carried` accepts) that moves first in the reference.
     pub fn first_moving_axis(&self, threshold_nm: i64, carried: impl Fn(usize) -> bool) -> Option<usize> {
-        self.axes()
+        let d = self
+            .axes()
             .iter()
             .filter(|a| carried(a.index))
-            .filter_map(|a| self.first_motion(a.index, threshold_nm).map(|t| (t, a.index)))
-            .min()
-            .map(|x| x.1)
+            .map(|a| (a.index, MotionDetector::new(a.index, threshold_nm), None))
+            .collect();
+        let mut d = Detectors { d };
+        if d.d.is_empty() {
+            return None;
+        }
+        self.source.replay(&mut d);
+        d.d.iter().filter_map(|(slot, _, t)| t.map(|t| (t, *slot))).min().map(|x| x.1)
     }
 
-    /// Indexes `trace`.
+    /// Indexes `trace` (its samples are read from it as the comparison needs them).
     pub fn new(trace: &'a Trace) -> Reference<'a> {
-        let mut t = Vec::new();
-        let mut s = Vec::new();
+        Reference::build(Source::Trace(trace), Feed::Trace(trace.events.iter()))
+    }
+
+    /// Indexes the run `source` in two passes (its discrete events and tap; its key points and
+    /// synchronised moves); its samples come from `feed`, the same run once more.
+    pub(crate) fn build(source: Source<'a>, feed: Feed<'a>) -> Reference<'a> {
+        let mut sk = Skeleton::default();
+        source.replay(&mut sk);
+        Reference::build_from(source, sk, feed, true)
+    }
+
+    /// As [`Reference::build`], its first pass `sk` done already ([`Skeleton::of`]); without
+    /// `keep_all`, [`Reference::trace`] keeps only the events the comparison matches (edges,
+    /// functions, alarms, the end), not the phases, blocks and inputs (which the scenario's
+    /// temporal rules need).
+    pub(crate) fn build_from(
+        source: Source<'a>,
+        mut sk: Skeleton,
+        feed: Feed<'a>,
+        keep_all: bool,
+    ) -> Reference<'a> {
+        let tap = sk.tap();
+        let mut trace = sk.trace();
         let mut phases = Vec::new();
         let mut inputs = Vec::new();
         for e in &trace.events {
             match &e.event {
-                Event::Sample(x) => {
-                    t.push(e.t_us as i64);
-                    s.push(*x);
-                }
                 Event::Phase(p) => phases.push((e.t_us as i64, *p)),
                 Event::Input { name, value } => inputs.push((e.t_us as i64, name.clone(), value.clone())),
                 _ => {}
             }
         }
-        let end_us = trace.events.last().map_or(0, |e| e.t_us as i64);
-        let tap = find_tap(trace);
-        let mut kt = KeyTracker::new(tap);
-        for e in &trace.events {
-            kt.event(e.t_us as i64, &e.event);
+        let plan = super::sync::plan(&trace, sk.end_us);
+        if !keep_all {
+            // Phases, blocks and inputs are read (plan, phases, inputs): only the scenario's
+            // temporal rules need them again.
+            trace
+                .events
+                .retain(|e| !matches!(e.event, Event::Phase(_) | Event::Block { .. } | Event::Input { .. }));
+            trace.events.shrink_to_fit();
         }
-        let cum_mdeg = super::sync::cumulative_angle(&t, &s);
-        let mut r = Reference {
+        let mut sv = Survey::new(tap, plan.spans.clone(), plan.lead.clone(), &trace.meta.axes);
+        source.replay(&mut sv);
+        let (keys, spans, parts) = sv.finish();
+        let sync = super::sync::build(plan, spans, parts, tap, &trace.meta.axes);
+        Reference {
             trace,
-            t,
-            s,
+            source,
+            win: RefCell::new(Window::new(feed)),
             tap,
-            keys: kt.finish(),
-            end_us,
+            keys,
+            end_us: sk.end_us,
             phases,
             inputs,
-            cum_mdeg,
-            sync: Vec::new(),
-            hint: std::cell::Cell::new(0),
-        };
-        r.sync = super::sync::windows(&r);
-        r
+            sync,
+            total_events: sk.total,
+            last_sample_t: sk.last_sample_t,
+            spindle_turns: sk.spindle_turns,
+            moves: sk.moves,
+            slimmed: false,
+            extremes: RefCell::new(Extremes::default()),
+        }
+    }
+
+    /// Drops the discrete events from [`Reference::trace`] (its end stays) and returns them:
+    /// memory no longer follows the number of holes. [`Reference::edges`] replays the run for
+    /// them when needed.
+    pub fn slim(&mut self) -> Trace {
+        let end: Vec<TraceEvent> = self
+            .trace
+            .events
+            .last()
+            .filter(|e| matches!(e.event, Event::End(_)))
+            .cloned()
+            .into_iter()
+            .collect();
+        self.slimmed = true;
+        Trace { meta: self.trace.meta.clone(), events: std::mem::replace(&mut self.trace.events, end) }
+    }
+
+    /// The edges of `s` in the reference (replayed when [`Reference::slim`] dropped them).
+    pub fn edges(&self, s: Signal) -> Vec<(u64, bool)> {
+        if !self.slimmed {
+            return self.trace.edges(s).collect();
+        }
+        struct Edges(Signal, Vec<(u64, bool)>);
+        impl TraceSink for Edges {
+            fn event(&mut self, ev: &TraceEvent) {
+                if let Event::Signal { signal, value } = ev.event {
+                    if signal == self.0 {
+                        self.1.push((ev.t_us, value));
+                    }
+                }
+            }
+        }
+        let mut e = Edges(s, Vec::new());
+        self.source.replay(&mut e);
+        e.1
+    }
+
+    /// Nothing before `floor` will be looked up any more: the samples before it may go.
+    pub fn forget_before(&self, floor: i64) {
+        self.win.borrow_mut().prune(floor);
     }
 
     /// The axis that travels furthest over [t0, t1] (None: none moves).
     pub fn furthest_axis(&self, t0: i64, t1: i64) -> Option<usize> {
-        let i0 = self.t.partition_point(|&x| x < t0);
-        let i1 = self.t.partition_point(|&x| x <= t1);
-        let seg = self.s.get(i0..i1.max(i0))?;
+        let mut w = self.win.borrow_mut();
+        w.ensure(t1);
+        let i0 = w.t.partition_point(|&x| x < t0);
+        let i1 = w.t.partition_point(|&x| x <= t1);
+        let seg = w.s.get(i0..i1.max(i0))?;
         let mut travel = [0i64; AXES];
-        for w in seg.windows(2) {
+        for p in seg.windows(2) {
             for (a, tr) in travel.iter_mut().enumerate() {
-                *tr += (w[1].axes[a] - w[0].axes[a]).abs();
+                *tr += (p[1].axes[a] - p[0].axes[a]).abs();
             }
         }
         let slot = (0..AXES).max_by_key(|&a| travel[a])?;
@@ -199,28 +401,15 @@ impl<'a> Reference<'a> {
         &self.trace.meta.axes
     }
 
-    /// The index of the last sample at or before `t` (None before the first).
-    fn idx_at(&self, t: i64) -> Option<usize> {
-        let h = self.hint.get();
-        // The sample at or before `t`: the hint, or one of the next two, else a binary search.
-        for k in h..(h + 3).min(self.t.len()) {
-            if self.t[k] <= t && self.t.get(k + 1).is_none_or(|&n| n > t) {
-                self.hint.set(k);
-                return Some(k);
-            }
-        }
-        let k = self.t.partition_point(|&x| x <= t).checked_sub(1)?;
-        self.hint.set(k);
-        Some(k)
-    }
-
     /// A value read from samples, interpolated linearly at `t` (held after the last sample).
     pub fn value_at(&self, t: i64, read: impl Fn(&Sample) -> i64) -> Option<f64> {
-        let i = self.idx_at(t).or(if self.s.is_empty() { None } else { Some(0) })?;
-        let v0 = read(&self.s[i]) as f64;
-        match self.s.get(i + 1) {
-            Some(n) if self.t[i] <= t => {
-                let f = (t - self.t[i]) as f64 / (self.t[i + 1] - self.t[i]).max(1) as f64;
+        let mut w = self.win.borrow_mut();
+        w.ensure(t);
+        let i = idx_at(&mut w, t).or(if w.s.is_empty() { None } else { Some(0) })?;
+        let v0 = read(&w.s[i]) as f64;
+        match w.s.get(i + 1) {
+            Some(n) if w.t[i] <= t => {
+                let f = (t - w.t[i]) as f64 / (w.t[i + 1] - w.t[i]).max(1) as f64;
                 Some(v0 + (read(n) as f64 - v0) * f)
             }
             _ => Some(v0),
@@ -229,13 +418,15 @@ impl<'a> Reference<'a> {
 
     /// The spindle angle at `t` (milli-degrees, 0 ≤ a < 360 000), interpolated unwrapped.
     pub fn angle_at(&self, t: i64) -> Option<f64> {
-        let i = self.idx_at(t).or(if self.s.is_empty() { None } else { Some(0) })?;
-        let a = match self.cum_mdeg.get(i + 1) {
-            Some(&n) if self.t[i] <= t => {
-                let f = (t - self.t[i]) as f64 / (self.t[i + 1] - self.t[i]).max(1) as f64;
-                self.cum_mdeg[i] + (n - self.cum_mdeg[i]) * f
+        let mut w = self.win.borrow_mut();
+        w.ensure(t);
+        let i = idx_at(&mut w, t).or(if w.s.is_empty() { None } else { Some(0) })?;
+        let a = match w.cum.get(i + 1) {
+            Some(&n) if w.t[i] <= t => {
+                let f = (t - w.t[i]) as f64 / (w.t[i + 1] - w.t[i]).max(1) as f64;
+                w.cum[i] + (n - w.cum[i]) * f
             }
-            _ => self.cum_mdeg[i],
+            _ => w.cum[i],
         };
         Some(a.rem_euclid(360_000.0))
     }
@@ -247,54 +438,32 @@ impl<'a> Reference<'a> {
 
     /// The range (min, max) of `slot` over [t0, t1], ends interpolated.
     pub fn range(&self, t0: i64, t1: i64, slot: usize) -> Option<(f64, f64)> {
-        let a = self.pos_at(t0, slot)?;
-        let b = self.pos_at(t1, slot)?;
-        let (mut lo, mut hi) = (a.min(b), a.max(b));
-        let i0 = self.t.partition_point(|&x| x < t0);
-        let i1 = self.t.partition_point(|&x| x <= t1);
-        for s in &self.s[i0..i1.max(i0)] {
-            let v = s.axes[slot] as f64;
-            lo = lo.min(v);
-            hi = hi.max(v);
-        }
-        Some((lo, hi))
+        let (lo, hi) = self.range_all(t0, t1)?;
+        Some((lo[slot], hi[slot]))
     }
 
     /// Every axis at `t`, interpolated (as [`Reference::pos_at`], in one search).
     pub fn pos_all(&self, t: i64) -> Option<[f64; AXES]> {
-        let i = self.idx_at(t).or(if self.s.is_empty() { None } else { Some(0) })?;
-        let a = &self.s[i];
-        let mut out = [0.0; AXES];
-        match self.s.get(i + 1) {
-            Some(n) if self.t[i] <= t => {
-                let f = (t - self.t[i]) as f64 / (self.t[i + 1] - self.t[i]).max(1) as f64;
-                for (k, o) in out.iter_mut().enumerate() {
-                    let v0 = a.axes[k] as f64;
-                    *o = v0 + (n.axes[k] as f64 - v0) * f;
-                }
-            }
-            _ => {
-                for (k, o) in out.iter_mut().enumerate() {
-                    *o = a.axes[k] as f64;
-                }
-            }
-        }
-        Some(out)
+        let mut w = self.win.borrow_mut();
+        w.ensure(t);
+        pos_all_in(&mut w, t)
     }
 
     /// The range (min, max) of every axis over [t0, t1], ends interpolated (as
     /// [`Reference::range`], in one pass).
     pub fn range_all(&self, t0: i64, t1: i64) -> Option<([f64; AXES], [f64; AXES])> {
-        let a = self.pos_all(t0)?;
-        let b = self.pos_all(t1)?;
+        let mut w = self.win.borrow_mut();
+        w.ensure(t1.max(t0));
+        let a = pos_all_in(&mut w, t0)?;
+        let b = pos_all_in(&mut w, t1)?;
         let (mut lo, mut hi) = ([0.0; AXES], [0.0; AXES]);
         for k in 0..AXES {
             lo[k] = a[k].min(b[k]);
             hi[k] = a[k].max(b[k]);
         }
-        let i0 = self.t.partition_point(|&x| x < t0);
-        let i1 = self.t.partition_point(|&x| x <= t1);
-        for s in &self.s[i0..i1.max(i0)] {
+        let i0 = w.t.partition_point(|&x| x < t0);
+        let i1 = w.t.partition_point(|&x| x <= t1);
+        for s in &w.s[i0..i1.max(i0)] {
             for k in 0..AXES {
                 let v = s.axes[k] as f64;
                 lo[k] = lo[k].min(v);
@@ -302,6 +471,94 @@ impl<'a> Reference<'a> {
             }
         }
         Some((lo, hi))
+    }
+
+    /// The position envelope at `t` of the axes `slots` marks: each one's range (min, max) over
+    /// [t − w, t + w], ends interpolated, and (with `at_too`) its position at `t`; exactly as
+    /// [`Reference::range_all`] and [`Reference::pos_all`] (the other axes are 0), in one pass.
+    #[allow(clippy::type_complexity)]
+    pub fn envelope(
+        &self,
+        t: i64,
+        w: i64,
+        slots: &[usize],
+        at_too: bool,
+    ) -> Option<([f64; AXES], [f64; AXES], Option<[f64; AXES]>)> {
+        let mut win = self.win.borrow_mut();
+        let (t0, t1) = (t - w, t + w);
+        win.ensure(t1.max(t0));
+        if win.s.is_empty() {
+            return None;
+        }
+        let i0 = win.first_at_or_after(t0);
+        let i1 = win.first_after(t1);
+        let n = win.t.len();
+        // The last sample at or before a time from the first after it (the first sample when
+        // none), and the value there.
+        let last_le = |first_after: usize| first_after.saturating_sub(1);
+        let value = |i: usize, x: i64, k: usize| -> f64 {
+            let v0 = win.s[i].axes[k] as f64;
+            if i + 1 < n && win.t[i] <= x {
+                let f = (x - win.t[i]) as f64 / (win.t[i + 1] - win.t[i]).max(1) as f64;
+                v0 + (win.s[i + 1].axes[k] as f64 - v0) * f
+            } else {
+                v0
+            }
+        };
+        let ia = last_le(if i0 < n && win.t[i0] == t0 { i0 + 1 } else { i0 });
+        let ib = last_le(i1);
+        let it = if at_too {
+            let lo = i0.min(n);
+            Some(last_le(lo + win.t[lo..i1.max(lo)].partition_point(|&x| x <= t)))
+        } else {
+            None
+        };
+        let (mut lo, mut hi, mut at) = ([0.0; AXES], [0.0; AXES], [0.0; AXES]);
+        let mut ex = self.extremes.borrow_mut();
+        ex.slide(&win, win.base + i0, win.base + i1.max(i0), slots);
+        for &k in slots {
+            let (a, b) = (value(ia, t0, k), value(ib, t1, k));
+            let (mut l, mut h) = (a.min(b), a.max(b));
+            if let Some((x, y)) = ex.get(&win, k) {
+                l = l.min(x as f64);
+                h = h.max(y as f64);
+            }
+            lo[k] = l;
+            hi[k] = h;
+            if let Some(i) = it {
+                at[k] = value(i, t, k);
+            }
+        }
+        Some((lo, hi, it.map(|_| at)))
+    }
+
+    /// The range (min, max) of the spindle speed over the samples within [t0, t1], milli-rpm
+    /// (None: no sample there).
+    pub fn speed_range(&self, t0: i64, t1: i64) -> Option<(i64, i64)> {
+        let mut w = self.win.borrow_mut();
+        w.ensure(t1);
+        let i0 = w.t.partition_point(|&x| x < t0);
+        let i1 = w.t.partition_point(|&x| x <= t1);
+        let seg = &w.s[i0..i1.max(i0)];
+        let lo = seg.iter().map(|q| q.spindle_mrpm).min()?;
+        let hi = seg.iter().map(|q| q.spindle_mrpm).max()?;
+        Some((lo, hi))
+    }
+
+    /// Runs `f` on the samples of the window that covers [lo, hi] (times, samples, cumulative
+    /// spindle angles, milli-degrees), every sample in [lo, hi] included, with the indices of
+    /// the first sample at or after `lo`, the first after `hi` and the first after `t`.
+    pub fn with_samples<R>(
+        &self,
+        lo: i64,
+        hi: i64,
+        t: i64,
+        f: impl FnOnce(&[i64], &[Sample], &[f64], [usize; 3]) -> R,
+    ) -> R {
+        let mut w = self.win.borrow_mut();
+        w.ensure(hi);
+        let at = [w.first_at_or_after_in(2, lo), w.first_after_in(3, hi), w.first_after_in(4, t)];
+        f(&w.t, &w.s, &w.cum, at)
     }
 
     /// The phase in force at `t`.
@@ -330,78 +587,4 @@ impl<'a> Reference<'a> {
     pub fn overload_by(&self, t: i64) -> bool {
         self.phases.iter().any(|(tp, p)| *p == Phase::OverloadRetract && *tp <= t)
     }
-}
-
-/// The tap axis: the axis that travels furthest while RGSPP or RGSPM is on; its lead from the
-/// travel over the signed revolutions of every stroke; the first stroke's signal and direction.
-fn find_tap(trace: &Trace) -> Option<Tap> {
-    let mut sig = Signals::default();
-    let mut first: Option<Signal> = None;
-    // Samples inside strokes, grouped in runs of consecutive samples.
-    let mut segs: Vec<Vec<(i64, Sample)>> = Vec::new();
-    let mut open = false;
-    for e in &trace.events {
-        match &e.event {
-            Event::Signal { signal, value } => {
-                if matches!(signal, Signal::Rgspp | Signal::Rgspm) && *value {
-                    first.get_or_insert(*signal);
-                    open = false; // every stroke is its own segment
-                }
-                sig.set(*signal, *value);
-            }
-            Event::Sample(s) => {
-                if sig.get(Signal::Rgspp) || sig.get(Signal::Rgspm) {
-                    if !open {
-                        segs.push(Vec::new());
-                        open = true;
-                    }
-                    if let Some(seg) = segs.last_mut() {
-                        seg.push((e.t_us as i64, *s));
-                    }
-                } else {
-                    open = false;
-                }
-            }
-            _ => {}
-        }
-    }
-    let in_signal = first?;
-    let mut travel = [0i64; AXES];
-    for seg in &segs {
-        for w in seg.windows(2) {
-            for (a, tr) in travel.iter_mut().enumerate() {
-                *tr += (w[1].1.axes[a] - w[0].1.axes[a]).abs();
-            }
-        }
-    }
-    let slot = (0..AXES).max_by_key(|&a| travel[a])?;
-    if travel[slot] == 0 {
-        return None;
-    }
-    let diameter = trace.meta.axes.iter().any(|a| a.index == slot && a.diameter);
-    let (mut lead_sum, mut rev_sum, mut into_sign) = (0f64, 0f64, 0i64);
-    for seg in &segs {
-        let (Some(a), Some(b)) = (seg.first(), seg.last()) else { continue };
-        let r: f64 = seg
-            .windows(2)
-            .map(|w| {
-                let (p, q) = (&w[0].1, &w[1].1);
-                unwrap_delta(p.spindle_mdeg, p.spindle_mrpm, q.spindle_mdeg, q.spindle_mrpm, w[1].0 - w[0].0)
-            })
-            .sum::<f64>()
-            / 360_000.0;
-        let d = (b.1.axes[slot] - a.1.axes[slot]) as f64;
-        if into_sign == 0 && d != 0.0 {
-            into_sign = if d > 0.0 { 1 } else { -1 };
-        }
-        if r.abs() > 0.25 {
-            lead_sum += d * r.signum();
-            rev_sum += r.abs();
-        }
-    }
-    if rev_sum < 0.25 {
-        return None;
-    }
-    let lead_nm = lead_sum / rev_sum / if diameter { 2.0 } else { 1.0 };
-    Some(Tap { slot, diameter, lead_nm, in_signal, into_sign: if into_sign == 0 { 1 } else { into_sign } })
 }

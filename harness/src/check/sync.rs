@@ -17,9 +17,10 @@
 //! after the index (G92.3, cycle 832), the start angle too (the error itself), whatever the
 //! clocks and sample times.
 
-use nc_engine::trace::{Event, Phase, Signal, Signals, Trace};
+use nc_engine::trace::{AxisSpec, Event, Phase, Signal, Signals, Trace};
 
 use super::reference::{unwrap_delta, Reference};
+use super::survey::{LeadBlock, Span};
 
 /// What kind of synchronised move a window is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -138,45 +139,35 @@ fn word(text: &str, letter: char) -> Option<f64> {
     None
 }
 
-/// The parts of [t0, t1] where the reference's furthest-travelling axis advances `lead_mm` per
-/// spindle revolution (within 3 %, the axis moving): a thread block's synchronised moves when the
-/// reference marks no phases in it (the rapids in and back are left out).
-fn by_lead(r: &Reference, t0: i64, t1: i64, lead_mm: f64) -> Vec<(i64, i64)> {
-    let Some(slot) = r.furthest_axis(t0, t1) else { return Vec::new() };
-    let div = if r.axes().iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
-    let want = lead_mm * 1e6;
-    let i0 = r.t.partition_point(|&x| x < t0);
-    let i1 = r.t.partition_point(|&x| x <= t1);
-    let mut out: Vec<(i64, i64)> = Vec::new();
-    let mut from: Option<i64> = None;
-    for i in i0..i1.saturating_sub(1) {
-        let dp = (r.s[i + 1].axes[slot] - r.s[i].axes[slot]).abs() as f64 / div;
-        let dr = (r.cum_mdeg[i + 1] - r.cum_mdeg[i]).abs() / 360_000.0;
-        let locked = dp > 100.0 && dr > 1e-6 && ((dp / dr) - want).abs() <= 0.03 * want;
-        match (locked, from) {
-            (true, None) => from = Some(r.t[i]),
-            (false, Some(a)) => {
-                out.push((a, r.t[i]));
-                from = None;
-            }
-            _ => {}
-        }
-    }
-    if let Some(a) = from {
-        out.push((a, r.t[i1.saturating_sub(1).max(i0)]));
-    }
-    out.retain(|w| w.1 - w.0 >= 20_000);
-    out
+/// A synchronised move found from the reference's discrete events, before its samples are read:
+/// a fixed interval, or the locked parts of a thread block the reference ran without phase
+/// events (KND G32, G92: the parts of it where the axis that travels furthest advances the
+/// block's F per spindle revolution, within 3 %, at least 20 ms; the rapids in and back are left
+/// out), found by [`super::survey::Survey`].
+enum Raw {
+    Fixed(i64, i64, Kind, bool, Option<&'static str>),
+    Lead(usize, &'static str),
 }
 
-/// The synchronised moves of `r`, in time order.
-pub fn windows(r: &Reference) -> Vec<Window> {
-    let trace: &Trace = r.trace;
+/// The synchronised moves of a reference, planned from its discrete events: the spans whose
+/// samples decide their axis and ends, and the lead blocks.
+pub struct Plan {
+    raw: Vec<Raw>,
+    /// The intervals of the fixed moves, in their order.
+    pub spans: Vec<(i64, i64)>,
+    /// The thread blocks without phase events.
+    pub lead: Vec<LeadBlock>,
+}
+
+/// Plans the synchronised moves of a reference from its discrete events (`trace`: samples are
+/// not looked at) ending at `end_us`.
+pub fn plan(trace: &Trace, end_us: i64) -> Plan {
     let dialect = trace.meta.dialect.to_string();
     let lathe = dialect.contains("lathe");
     let heidenhain = dialect == "heidenhain";
     let (threads, follows, locked) = sync_codes(&dialect);
-    let mut raw: Vec<(i64, i64, Kind, bool, Option<&'static str>)> = Vec::new();
+    let mut raw: Vec<Raw> = Vec::new();
+    let mut lead: Vec<LeadBlock> = Vec::new();
     let mut sig = Signals::default();
     let mut stroke_from: Option<i64> = None;
     let mut code: Option<String> = None;
@@ -184,6 +175,10 @@ pub fn windows(r: &Reference) -> Vec<Window> {
     let mut block: Option<(i64, &'static str, f64)> = None;
     let mut phased = false;
     let mut feed: Option<f64> = None;
+    let mut by_lead = |raw: &mut Vec<Raw>, t0: i64, t1: i64, g: &'static str, f: f64| {
+        raw.push(Raw::Lead(lead.len(), g));
+        lead.push(LeadBlock { t0, t1, lead_mm: f });
+    };
     for e in &trace.events {
         let t = e.t_us as i64;
         match &e.event {
@@ -193,7 +188,7 @@ pub fn windows(r: &Reference) -> Vec<Window> {
                 match (on, stroke_from) {
                     (true, None) => stroke_from = Some(t),
                     (false, Some(a)) => {
-                        raw.push((a, t, Kind::Stroke, false, None));
+                        raw.push(Raw::Fixed(a, t, Kind::Stroke, false, None));
                         stroke_from = None;
                     }
                     _ => {}
@@ -204,11 +199,7 @@ pub fn windows(r: &Reference) -> Vec<Window> {
                 // parts are found by their lead.
                 if let Some((b0, g, f)) = block.take() {
                     if !phased {
-                        raw.extend(
-                            by_lead(r, b0, t, f)
-                                .into_iter()
-                                .map(|(a, b)| (a, b, Kind::Thread, false, Some(g))),
-                        );
+                        by_lead(&mut raw, b0, t, g, f);
                     }
                 }
                 if let Some(c) = motion_code(text, lathe) {
@@ -224,7 +215,7 @@ pub fn windows(r: &Reference) -> Vec<Window> {
             Event::Phase(p) => {
                 phased = true;
                 if let Some((a, k, l, g)) = open.take() {
-                    raw.push((a, t, k, l, g));
+                    raw.push(Raw::Fixed(a, t, k, l, g));
                 }
                 let c = code.as_deref().unwrap_or("");
                 let g = threads.iter().chain(follows).find(|x| **x == c).copied();
@@ -243,34 +234,67 @@ pub fn windows(r: &Reference) -> Vec<Window> {
         }
     }
     if let Some((a, k, l, g)) = open {
-        raw.push((a, r.end_us, k, l, g));
+        raw.push(Raw::Fixed(a, end_us, k, l, g));
     }
     if let Some((b0, g, f)) = block.filter(|_| !phased) {
-        raw.extend(
-            by_lead(r, b0, r.end_us, f).into_iter().map(|(a, b)| (a, b, Kind::Thread, false, Some(g))),
-        );
+        by_lead(&mut raw, b0, end_us, g, f);
     }
     if let Some(a) = stroke_from {
-        raw.push((a, r.end_us, Kind::Stroke, false, None));
+        raw.push(Raw::Fixed(a, end_us, Kind::Stroke, false, None));
+    }
+    let spans = raw
+        .iter()
+        .filter_map(|w| match w {
+            Raw::Fixed(a, b, ..) => Some((*a, *b)),
+            Raw::Lead(..) => None,
+        })
+        .collect();
+    Plan { raw, spans, lead }
+}
+
+/// The synchronised moves of a reference, in time order, from its plan and what the survey of
+/// its samples found (`spans` in the order of [`Plan::spans`], the locked parts of each lead
+/// block).
+pub fn build(
+    plan: Plan,
+    spans: Vec<Span>,
+    lead_parts: Vec<Vec<(i64, i64, Span)>>,
+    tap: Option<super::reference::Tap>,
+    axes: &[AxisSpec],
+) -> Vec<Window> {
+    let mut spans = spans.into_iter();
+    let mut lead_parts: Vec<Option<Vec<(i64, i64, Span)>>> = lead_parts.into_iter().map(Some).collect();
+    type Move = (i64, i64, Kind, bool, Option<&'static str>, Span);
+    let mut raw: Vec<Move> = Vec::new();
+    for w in plan.raw {
+        match w {
+            Raw::Fixed(a, b, k, l, g) => raw.push((a, b, k, l, g, spans.next().unwrap_or_default())),
+            Raw::Lead(i, g) => {
+                for (a, b, span) in lead_parts.get_mut(i).and_then(Option::take).unwrap_or_default() {
+                    raw.push((a, b, Kind::Thread, false, Some(g), span));
+                }
+            }
+        }
     }
     raw.sort_by_key(|w| w.0);
     let mut counts = [0usize; 3];
     let mut out = Vec::new();
-    for (t0, t1, kind, locked, code) in raw {
+    for (t0, t1, kind, locked, code, span) in raw {
         let slot = match kind {
-            Kind::Stroke => match r.tap {
+            Kind::Stroke => match tap {
                 Some(tap) => tap.slot,
                 None => continue,
             },
-            _ => match r.furthest_axis(t0, t1) {
+            _ => match span.furthest() {
                 Some(s) => s,
                 None => continue,
             },
         };
-        let div = if r.axes().iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
+        let div = if axes.iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
         let k = kind as usize;
         counts[k] += 1;
-        let ends = [r.pos_at(t0, slot).unwrap_or(0.0), r.pos_at(t1, slot).unwrap_or(0.0)];
+        let end = |i: usize| span.ends[i].map_or(0.0, |e| e[slot]);
+        let ends = [end(0), end(1)];
         out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k], code, ends });
     }
     out
@@ -298,48 +322,48 @@ pub fn error_at(
     if w.ends.iter().any(|&e| (pos as f64 - e).abs() <= still_nm as f64) {
         return None;
     }
-    let i0 = r.t.partition_point(|&x| x < lo);
-    let i1 = r.t.partition_point(|&x| x <= hi);
-    // Segments outward from the one at `t`; the crossing nearest in time wins (both sides of a
-    // ring are looked at before stopping).
-    let seg = |i: usize| -> Option<(i64, usize, f64)> {
-        let (a, b) = (r.s[i].axes[w.slot], r.s[i + 1].axes[w.slot]);
-        if (a - pos).signum() * (b - pos).signum() > 0 || (b - a).abs() < 100 {
-            return None;
-        }
-        let f = (pos - a) as f64 / (b - a) as f64;
-        Some((r.t[i] + (f * (r.t[i + 1] - r.t[i]) as f64) as i64, i, f))
-    };
-    let last = i1.saturating_sub(1);
-    let mid = r.t.partition_point(|&x| x <= t).saturating_sub(1).clamp(i0, last.max(i0));
-    let mut best: Option<(i64, usize, f64)> = None;
-    for d in 0..=(last.saturating_sub(i0)) {
-        for i in [mid.checked_add(d), mid.checked_sub(d + 1)].into_iter().flatten() {
-            if i < i0 || i >= last {
-                continue;
+    r.with_samples(lo, hi, t, |rt, rs, rc, [i0, i1, after_t]| {
+        // Segments outward from the one at `t`; the crossing nearest in time wins (both sides of a
+        // ring are looked at before stopping).
+        let seg = |i: usize| -> Option<(i64, usize, f64)> {
+            let (a, b) = (rs[i].axes[w.slot], rs[i + 1].axes[w.slot]);
+            if (a - pos).signum() * (b - pos).signum() > 0 || (b - a).abs() < 100 {
+                return None;
             }
-            if let Some(c) = seg(i) {
-                if best.is_none_or(|(bt, _, _)| (c.0 - t).abs() < (bt - t).abs()) {
-                    best = Some(c);
+            let f = (pos - a) as f64 / (b - a) as f64;
+            Some((rt[i] + (f * (rt[i + 1] - rt[i]) as f64) as i64, i, f))
+        };
+        let last = i1.saturating_sub(1);
+        let mid = after_t.saturating_sub(1).clamp(i0, last.max(i0));
+        let mut best: Option<(i64, usize, f64)> = None;
+        for d in 0..=(last.saturating_sub(i0)) {
+            for i in [mid.checked_add(d), mid.checked_sub(d + 1)].into_iter().flatten() {
+                if i < i0 || i >= last {
+                    continue;
+                }
+                if let Some(c) = seg(i) {
+                    if best.is_none_or(|(bt, _, _)| (c.0 - t).abs() < (bt - t).abs()) {
+                        best = Some(c);
+                    }
                 }
             }
+            if best.is_some() {
+                break;
+            }
         }
-        if best.is_some() {
-            break;
+        let (_, i, f) = best?;
+        let d_ang = rc[i + 1] - rc[i];
+        if d_ang.abs() < 1.0 {
+            return None;
         }
-    }
-    let (_, i, f) = best?;
-    let d_ang = r.cum_mdeg[i + 1] - r.cum_mdeg[i];
-    if d_ang.abs() < 1.0 {
-        return None;
-    }
-    let lead_nm_per_mdeg = (r.s[i + 1].axes[w.slot] - r.s[i].axes[w.slot]) as f64 / d_ang;
-    let ref_angle = (r.cum_mdeg[i] + f * d_ang).rem_euclid(360_000.0);
-    let mut delta = (angle_mdeg as f64 - ref_angle).rem_euclid(360_000.0);
-    if delta > 180_000.0 {
-        delta -= 360_000.0;
-    }
-    Some(-delta * lead_nm_per_mdeg / w.div)
+        let lead_nm_per_mdeg = (rs[i + 1].axes[w.slot] - rs[i].axes[w.slot]) as f64 / d_ang;
+        let ref_angle = (rc[i] + f * d_ang).rem_euclid(360_000.0);
+        let mut delta = (angle_mdeg as f64 - ref_angle).rem_euclid(360_000.0);
+        if delta > 180_000.0 {
+            delta -= 360_000.0;
+        }
+        Some(-delta * lead_nm_per_mdeg / w.div)
+    })
 }
 
 /// The cumulative unwrapped spindle angle at each reference sample, milli-degrees.

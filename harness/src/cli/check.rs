@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use clap::builder::PossibleValuesParser;
 use clap::Args;
-use nc_engine::trace::{EndReason, Event, TraceEvent, TraceMeta, TraceSink, VecSink};
+use nc_engine::trace::{EndReason, Event, TraceEvent, TraceMeta, TraceSink};
 use nc_engine::{Machine, RunOptions};
 
 use super::{display_name, parse_error, run_scenario, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
@@ -104,75 +104,97 @@ const MAX_OFFSET_US: i64 = 1_000_000_000_000_000;
 /// The most recorded events other than samples a comparison keeps.
 const MAX_RECORDED_EVENTS: usize = 1_000_000;
 
-/// The most events of a program's reference run held in memory.
+/// The most discrete events (every event but the samples) of a reference run.
 const MAX_REFERENCE_EVENTS: usize = 1_000_000;
 
-/// A sink keeping the whole trace, that stops the run at `cap` events.
-struct Capped {
-    inner: VecSink,
-    cap: usize,
+/// The most samples of a reference run (10 hours at 1 ms): a program that never ends
+/// (a slow feed) is refused, not replayed for days.
+const MAX_REFERENCE_SAMPLES: usize = 36_000_000;
+
+/// A sink passing a run on that stops it at [`MAX_REFERENCE_EVENTS`] discrete events or
+/// [`MAX_REFERENCE_SAMPLES`] samples (the same place in every replay).
+struct Capped<'s> {
+    inner: &'s mut dyn TraceSink,
+    discrete: usize,
+    samples: usize,
 }
 
-impl TraceSink for Capped {
+impl TraceSink for Capped<'_> {
     fn start(&mut self, meta: &TraceMeta) {
         self.inner.start(meta);
     }
     fn event(&mut self, ev: &TraceEvent) {
+        if matches!(ev.event, Event::Sample(_)) {
+            self.samples += 1;
+        } else {
+            self.discrete += 1;
+        }
         self.inner.event(ev);
     }
     fn wants_stop(&self) -> bool {
-        self.inner.events.len() >= self.cap
+        self.discrete >= MAX_REFERENCE_EVENTS
+            || self.samples >= MAX_REFERENCE_SAMPLES
+            || self.inner.wants_stop()
     }
 }
 
 fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     let input_name = display_name(&args.input);
     // The reference run.
-    let (title, reference, expect, rules, tol_default) = if run_scenario::is_scenario(&args.input) {
-        if args.dialect.is_some() || args.params.is_some() {
-            return Err(InputError::new(
-                "--dialect/--params",
-                "a scenario names its own dialect and parameters",
-            ));
-        }
-        let s = load::load(&args.input, &input_name)?;
-        let side = args.input.with_extension("check.yaml");
-        let tol = if side.is_file() { Some(side) } else { None };
-        let trace = s.machine.run_to_trace(&s.program, &s.opts);
-        (format!("{} — {}", s.name, s.title), trace, Some(s.expect), s.rules, tol)
-    } else {
-        let Some(dialect) = &args.dialect else {
-            let mut e = InputError::new("--dialect", "a program needs --dialect");
-            e.expected = Some(format!("one of: {}", nc_engine::dialect_names().join(", ")));
-            return Err(e);
+    let (title, machine, program, run_opts, expect, rules, tol_default) =
+        if run_scenario::is_scenario(&args.input) {
+            if args.dialect.is_some() || args.params.is_some() {
+                return Err(InputError::new(
+                    "--dialect/--params",
+                    "a scenario names its own dialect and parameters",
+                ));
+            }
+            let s = load::load(&args.input, &input_name)?;
+            let side = args.input.with_extension("check.yaml");
+            let tol = if side.is_file() { Some(side) } else { None };
+            (format!("{} — {}", s.name, s.title), s.machine, s.program, s.opts, Some(s.expect), s.rules, tol)
+        } else {
+            let Some(dialect) = &args.dialect else {
+                let mut e = InputError::new("--dialect", "a program needs --dialect");
+                e.expected = Some(format!("one of: {}", nc_engine::dialect_names().join(", ")));
+                return Err(e);
+            };
+            let mut machine = Machine::new(dialect)
+                .ok_or_else(|| InputError::new("--dialect", format!("unknown dialect `{dialect}`")))?;
+            if let Some(p) = &args.params {
+                let yaml = input::read_utf8(p, input::YAML)?;
+                params_yaml::apply(&yaml, &mut machine)
+                    .map_err(|e| InputError::at(display_name(p), &yaml, e.span, e.message, e.expected))?;
+            }
+            let text = input::read_text(&args.input, input::PROGRAM)?;
+            let program = machine.parse(&text).map_err(|e| parse_error(&input_name, &text, &e))?;
+            (
+                format!("{input_name} ({dialect}, default inputs)"),
+                machine,
+                program,
+                RunOptions::default(),
+                None,
+                Vec::new(),
+                None,
+            )
         };
-        let mut machine = Machine::new(dialect)
-            .ok_or_else(|| InputError::new("--dialect", format!("unknown dialect `{dialect}`")))?;
-        if let Some(p) = &args.params {
-            let yaml = input::read_utf8(p, input::YAML)?;
-            params_yaml::apply(&yaml, &mut machine)
-                .map_err(|e| InputError::at(display_name(p), &yaml, e.span, e.message, e.expected))?;
-        }
-        let text = input::read_text(&args.input, input::PROGRAM)?;
-        let program = machine.parse(&text).map_err(|e| parse_error(&input_name, &text, &e))?;
-        // Held in memory: at most MAX_REFERENCE_EVENTS events (a slow feed would otherwise fill
-        // the memory with seven days of samples).
-        let mut sink = Capped { inner: VecSink::default(), cap: MAX_REFERENCE_EVENTS };
-        machine.run(&program, &RunOptions::default(), &mut sink);
-        let trace = sink.inner.into_trace();
-        if trace.end().is_some_and(|e| e.reason == EndReason::OutputLimit) {
-            let secs = trace.events.last().map_or(0, |e| e.t_us) as f64 / 1e6;
-            let mut e = InputError::new(
-                &input_name,
-                format!(
-                    "the reference run of the program did not end within {MAX_REFERENCE_EVENTS} trace events ({secs} s of machine time)"
-                ),
-            );
-            e.expected = Some("a program that ends (check compares whole runs)".into());
-            return Err(e);
-        }
-        (format!("{input_name} ({dialect}, default inputs)"), trace, None, Vec::new(), None)
+    // The reference run, replayed as the comparison needs it (never held whole).
+    let run = |sink: &mut dyn TraceSink| {
+        machine.run(&program, &run_opts, &mut Capped { inner: sink, discrete: 0, samples: 0 });
     };
+    let source = check::Source::Run(&run);
+    let skeleton = check::survey::Skeleton::of(source);
+    if skeleton.end().is_some_and(|e| e.reason == EndReason::OutputLimit) {
+        let secs = skeleton.end_us as f64 / 1e6;
+        let mut e = InputError::new(
+            &input_name,
+            format!(
+                "the reference run of the program did not end within {MAX_REFERENCE_EVENTS} trace events and {MAX_REFERENCE_SAMPLES} samples ({secs} s of machine time)"
+            ),
+        );
+        e.expected = Some("a program that ends (check compares whole runs)".into());
+        return Err(e);
+    }
     let tolerances = match args.tolerances.as_ref().or(tol_default.as_ref()) {
         Some(p) => load_tolerances(p)?,
         None => Tolerances::default(),
@@ -209,17 +231,17 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     // A JSON Lines trace names its dialect: one other than the reference's is a mistake in the
     // command line, not 25 divergences.
     if let Some(recorded) = importer.meta().trace.as_ref().map(|m| m.dialect) {
-        if recorded != reference.meta.dialect {
+        if recorded != machine.dialect.name() {
             let mut e = InputError::new(
                 display_name(&args.trace),
                 format!(
                     "the trace was recorded with dialect {} (its meta line), the reference runs {}",
                     crate::diag::printable(recorded, 40),
-                    reference.meta.dialect
+                    machine.dialect.name()
                 ),
             );
             e.expected =
-                Some(format!("a trace of dialect {} (or --dialect {recorded})", reference.meta.dialect));
+                Some(format!("a trace of dialect {} (or --dialect {recorded})", machine.dialect.name()));
             return Err(e);
         }
     }
@@ -256,10 +278,34 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     });
     let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
     let mut progress = super::progress::Progress::new("check");
-    let rep = check::check(&reference, stream.inspect(|e: &TraceEvent| progress.tick(e.t_us)), &spec);
+    let mut rep = check::check_surveyed(
+        source,
+        skeleton,
+        stream.inspect(|e: &TraceEvent| progress.tick(e.t_us)),
+        &spec,
+    );
     progress.done();
     if let Some(e) = failure {
         return Err(import_error(&e));
+    }
+    // The reports show the samples around the divergences (and the HTML page one per bucket of
+    // the whole run): the reference is replayed and, when the compact copy could not keep every
+    // sample, the recording read again for them.
+    let windows = check::excerpt::windows(&rep);
+    let bucket = (rep.reference.events.last().map_or(0, |e| e.t_us as i64) / 1500).max(1000);
+    let reference = if windows.is_empty() && args.html.is_none() {
+        let meta = rep.reference.meta.clone();
+        std::mem::replace(&mut rep.reference, nc_engine::trace::Trace { meta, events: Vec::new() })
+    } else {
+        check::excerpt::reference(source, &windows, if args.html.is_some() { bucket } else { i64::MAX })
+    };
+    let samples = rep.recorded.events.iter().filter(|e| matches!(e.event, Event::Sample(_))).count();
+    let full = samples >= check::compare::MAX_COMPACT_SAMPLES
+        || rep.recorded.events.len() - samples >= check::compare::MAX_COMPACT_EVENTS;
+    if !windows.is_empty() && full {
+        if let Ok(again) = import::open(&args.trace, &opts) {
+            check::excerpt::fill_recorded(&mut rep, &windows, again.map_while(Result::ok));
+        }
     }
     let warnings = importer.warnings().total();
     let trace_name = display_name(&args.trace);

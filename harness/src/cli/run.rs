@@ -138,7 +138,9 @@ fn run_inner(args: &RunArgs) -> Result<u8, InputError> {
         ..RunOptions::default()
     };
     let budget = args.max_output_mib.checked_mul(1024 * 1024).filter(|b| *b > 0).unwrap_or(u64::MAX);
-    let writer = FirstAlarm::new(JsonlWriter::new(Digest::new(Some(sink))).with_budget(budget));
+    let writer = FirstAlarm::new(
+        JsonlWriter::new(Digest::new(Some(sink)).hashing(args.check_determinism)).with_budget(budget),
+    );
     let mut writer = super::progress::Watched::new("run", writer);
     machine.run(&program, &opts, &mut writer);
     let writer = writer.done();

@@ -1,0 +1,434 @@
+//! The passes over the reference run that index it without keeping its samples: the first keeps
+//! its discrete events (the "skeleton") and finds the tap; the second, knowing the tap, reads its
+//! key points and the figures of its synchronised moves (`check::sync`). The comparison then
+//! reads the samples a third time through a sliding [`super::window::Window`].
+//!
+//! A [`Source`] is a reference run that can be replayed as often as needed: a trace in memory,
+//! or the engine run again (it is deterministic), through the engine's public API.
+
+use nc_engine::trace::{Event, Sample, Signal, Signals, Trace, TraceEvent, TraceMeta, TraceSink, AXES};
+
+use super::keypoints::{KeyPoints, KeyTracker};
+use super::reference::{unwrap_delta, Tap};
+
+/// A reference run, replayable.
+#[derive(Clone, Copy)]
+pub enum Source<'a> {
+    /// A trace in memory.
+    Trace(&'a Trace),
+    /// A run into a sink (the engine: `machine.run(&program, &opts, sink)`).
+    Run(&'a (dyn Fn(&mut dyn TraceSink) + Sync)),
+}
+
+impl Source<'_> {
+    /// Replays the run into `sink` (stopping when the sink asks to).
+    pub fn replay(&self, sink: &mut dyn TraceSink) {
+        match self {
+            Source::Trace(t) => {
+                sink.start(&t.meta);
+                for e in &t.events {
+                    if sink.wants_stop() {
+                        break;
+                    }
+                    sink.event(e);
+                }
+            }
+            Source::Run(f) => f(sink),
+        }
+    }
+}
+
+/// The first pass: the discrete events, the tap and what the samples say as a whole.
+#[derive(Default)]
+pub struct Skeleton {
+    /// The header.
+    pub meta: Option<TraceMeta>,
+    /// Every event but the samples.
+    pub events: Vec<TraceEvent>,
+    /// Every event, samples included.
+    pub total: usize,
+    /// The time of the last event.
+    pub end_us: i64,
+    /// The time of the last sample.
+    pub last_sample_t: Option<i64>,
+    /// The spindle turns at some sample.
+    pub spindle_turns: bool,
+    /// Each axis is somewhere else than at the first sample at some sample.
+    pub moves: [bool; AXES],
+    first: Option<Sample>,
+    tap: TapFinder,
+}
+
+impl TraceSink for Skeleton {
+    fn start(&mut self, meta: &TraceMeta) {
+        self.meta = Some(meta.clone());
+    }
+    fn event(&mut self, ev: &TraceEvent) {
+        self.total += 1;
+        self.end_us = ev.t_us as i64;
+        match &ev.event {
+            Event::Sample(s) => {
+                let t = ev.t_us as i64;
+                self.last_sample_t = Some(t);
+                self.spindle_turns |= s.spindle_mrpm != 0;
+                let f = *self.first.get_or_insert(*s);
+                for (k, m) in self.moves.iter_mut().enumerate() {
+                    *m |= s.axes[k] != f.axes[k];
+                }
+                self.tap.sample(t, s);
+            }
+            e => {
+                if let Event::Signal { signal, value } = e {
+                    self.tap.signal(*signal, *value);
+                }
+                self.events.push(ev.clone());
+            }
+        }
+    }
+}
+
+impl Skeleton {
+    /// The first pass over `source`.
+    pub fn of(source: Source) -> Skeleton {
+        let mut sk = Skeleton::default();
+        source.replay(&mut sk);
+        sk
+    }
+
+    /// The end of the run (None: it has none).
+    pub fn end(&self) -> Option<&nc_engine::trace::EndSummary> {
+        match self.events.last().map(|e| &e.event) {
+            Some(Event::End(s)) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The discrete events as a trace (its last event the end).
+    pub fn trace(&mut self) -> Trace {
+        self.events.shrink_to_fit();
+        Trace {
+            meta: self.meta.clone().unwrap_or(TraceMeta {
+                dialect: "",
+                axes: Vec::new(),
+                period_us: 0,
+                sample_us: 0,
+            }),
+            events: std::mem::take(&mut self.events),
+        }
+    }
+
+    /// The tap axis: the axis that travels furthest while RGSPP or RGSPM is on; its lead from the
+    /// travel over the signed revolutions of every stroke; the first stroke's signal and
+    /// direction.
+    pub fn tap(&self) -> Option<Tap> {
+        let axes = self.meta.as_ref().map(|m| m.axes.as_slice()).unwrap_or(&[]);
+        self.tap.finish(axes)
+    }
+}
+
+/// One run of consecutive samples inside a stroke.
+struct Seg {
+    first: Sample,
+    last: (i64, Sample),
+    rev_mdeg: f64,
+}
+
+/// Finds the tap while the run streams by (see [`Skeleton::tap`]).
+#[derive(Default)]
+struct TapFinder {
+    sig: Signals,
+    first: Option<Signal>,
+    segs: Vec<Seg>,
+    open: bool,
+    travel: [i64; AXES],
+}
+
+impl TapFinder {
+    fn signal(&mut self, signal: Signal, value: bool) {
+        if matches!(signal, Signal::Rgspp | Signal::Rgspm) && value {
+            self.first.get_or_insert(signal);
+            self.open = false; // every stroke is its own segment
+        }
+        self.sig.set(signal, value);
+    }
+
+    fn sample(&mut self, t: i64, s: &Sample) {
+        if !(self.sig.get(Signal::Rgspp) || self.sig.get(Signal::Rgspm)) {
+            self.open = false;
+            return;
+        }
+        if !self.open {
+            self.segs.push(Seg { first: *s, last: (t, *s), rev_mdeg: 0.0 });
+            self.open = true;
+            return;
+        }
+        let Some(seg) = self.segs.last_mut() else { return };
+        let (tp, p) = seg.last;
+        for (a, tr) in self.travel.iter_mut().enumerate() {
+            *tr += (s.axes[a] - p.axes[a]).abs();
+        }
+        seg.rev_mdeg += unwrap_delta(p.spindle_mdeg, p.spindle_mrpm, s.spindle_mdeg, s.spindle_mrpm, t - tp);
+        seg.last = (t, *s);
+    }
+
+    fn finish(&self, axes: &[nc_engine::trace::AxisSpec]) -> Option<Tap> {
+        let in_signal = self.first?;
+        let travel = self.travel;
+        let slot = (0..AXES).max_by_key(|&a| travel[a])?;
+        if travel[slot] == 0 {
+            return None;
+        }
+        let diameter = axes.iter().any(|a| a.index == slot && a.diameter);
+        let (mut lead_sum, mut rev_sum, mut into_sign) = (0f64, 0f64, 0i64);
+        for seg in &self.segs {
+            let r = seg.rev_mdeg / 360_000.0;
+            let d = (seg.last.1.axes[slot] - seg.first.axes[slot]) as f64;
+            if into_sign == 0 && d != 0.0 {
+                into_sign = if d > 0.0 { 1 } else { -1 };
+            }
+            if r.abs() > 0.25 {
+                lead_sum += d * r.signum();
+                rev_sum += r.abs();
+            }
+        }
+        if rev_sum < 0.25 {
+            return None;
+        }
+        let lead_nm = lead_sum / rev_sum / if diameter { 2.0 } else { 1.0 };
+        Some(Tap {
+            slot,
+            diameter,
+            lead_nm,
+            in_signal,
+            into_sign: if into_sign == 0 { 1 } else { into_sign },
+        })
+    }
+}
+
+/// What the second pass found about one interval [t0, t1] of the reference.
+#[derive(Debug, Clone, Default)]
+pub struct Span {
+    /// Travel of each axis over the samples within it (sum of |steps|), nm.
+    pub travel: [i64; AXES],
+    /// Every axis at t0 and at t1, interpolated as `Reference::pos_at` does (None: no sample).
+    pub ends: [Option<[f64; AXES]>; 2],
+}
+
+impl Span {
+    /// The axis that travels furthest in it (None: none moves), as `Reference::furthest_axis`.
+    pub fn furthest(&self) -> Option<usize> {
+        let slot = (0..AXES).max_by_key(|&a| self.travel[a])?;
+        (self.travel[slot] > 0).then_some(slot)
+    }
+}
+
+/// A thread block the reference ran without phase events: its parts where the axis that travels
+/// furthest advances `lead_mm` per spindle revolution (see `sync::by_lead`).
+#[derive(Debug, Clone)]
+pub struct LeadBlock {
+    /// Start and end of the block.
+    pub t0: i64,
+    /// End.
+    pub t1: i64,
+    /// The block's F, mm per revolution.
+    pub lead_mm: f64,
+}
+
+/// One locked part of a lead block for one candidate axis: (start, end) at sample times, the
+/// span over it.
+type LeadPart = (i64, i64, Span);
+
+#[derive(Default, Clone)]
+struct LeadState {
+    span: Span,
+    prev: Option<(i64, Sample, f64)>,
+    open: [Option<(i64, Span)>; AXES],
+    parts: [Vec<LeadPart>; AXES],
+}
+
+/// The second pass: key points and the spans of the synchronised moves.
+pub struct Survey {
+    keys: KeyTracker,
+    spans: Vec<(i64, i64)>,
+    out: Vec<Span>,
+    /// Spans started and not yet past their end.
+    active: Vec<usize>,
+    next: usize,
+    /// Spans sorted by start (indices into `spans`).
+    order: Vec<usize>,
+    in_span: Vec<Option<Sample>>,
+    lead: Vec<LeadBlock>,
+    lead_state: Vec<LeadState>,
+    div: [f64; AXES],
+    prev: Option<(i64, Sample)>,
+    cum: Option<(i64, Sample, f64)>,
+}
+
+/// `v0 + (v1 − v0) · f` at `t` between the samples `p` (at or before `t`) and `n`, as
+/// `Reference::value_at`.
+fn interp(p: &(i64, Sample), n: (i64, &Sample), t: i64) -> [f64; AXES] {
+    let f = (t - p.0) as f64 / (n.0 - p.0).max(1) as f64;
+    let mut out = [0.0; AXES];
+    for (k, o) in out.iter_mut().enumerate() {
+        let v0 = p.1.axes[k] as f64;
+        *o = v0 + (n.1.axes[k] as f64 - v0) * f;
+    }
+    out
+}
+
+fn held(s: &Sample) -> [f64; AXES] {
+    let mut out = [0.0; AXES];
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = s.axes[k] as f64;
+    }
+    out
+}
+
+impl Survey {
+    /// A pass for the reference's tap, reading the spans `spans` and the lead blocks `lead`.
+    pub fn new(
+        tap: Option<Tap>,
+        spans: Vec<(i64, i64)>,
+        lead: Vec<LeadBlock>,
+        meta_axes: &[nc_engine::trace::AxisSpec],
+    ) -> Survey {
+        let mut order: Vec<usize> = (0..spans.len()).collect();
+        order.sort_by_key(|&i| spans[i].0);
+        let mut div = [1.0; AXES];
+        for a in meta_axes.iter().filter(|a| a.diameter) {
+            div[a.index] = 2.0;
+        }
+        Survey {
+            keys: KeyTracker::new(tap),
+            out: vec![Span::default(); spans.len()],
+            in_span: vec![None; spans.len()],
+            spans,
+            active: Vec::new(),
+            next: 0,
+            order,
+            lead_state: vec![LeadState::default(); lead.len()],
+            lead,
+            div,
+            prev: None,
+            cum: None,
+        }
+    }
+
+    fn sample(&mut self, t: i64, s: &Sample) {
+        while self.next < self.order.len() && self.spans[self.order[self.next]].0 <= t {
+            self.active.push(self.order[self.next]);
+            self.next += 1;
+        }
+        let prev = self.prev;
+        let (spans, out, in_span) = (&self.spans, &mut self.out, &mut self.in_span);
+        self.active.retain(|&i| {
+            let (t0, t1) = spans[i];
+            let o = &mut out[i];
+            for (k, tk) in [t0, t1].into_iter().enumerate() {
+                if o.ends[k].is_none() && t > tk {
+                    o.ends[k] = Some(match &prev {
+                        Some(p) => interp(p, (t, s), tk),
+                        None => held(s),
+                    });
+                }
+            }
+            if t0 <= t && t <= t1 {
+                if let Some(p) = &in_span[i] {
+                    for (a, tr) in o.travel.iter_mut().enumerate() {
+                        *tr += (s.axes[a] - p.axes[a]).abs();
+                    }
+                }
+                in_span[i] = Some(*s);
+            }
+            t <= t1
+        });
+        // Spans that start after the first sample but whose ends come before it cannot occur
+        // (they are activated at their start); a span starting before the first sample gets
+        // the first sample held for its start (above, `prev` None).
+        let acc = match self.cum {
+            None => s.spindle_mdeg as f64,
+            Some((tp, p, acc)) => {
+                acc + unwrap_delta(p.spindle_mdeg, p.spindle_mrpm, s.spindle_mdeg, s.spindle_mrpm, t - tp)
+            }
+        };
+        self.cum = Some((t, *s, acc));
+        for (b, st) in self.lead.iter().zip(self.lead_state.iter_mut()) {
+            if t < b.t0 || t > b.t1 {
+                continue;
+            }
+            if let Some((tp, p, ap)) = st.prev {
+                for (a, tr) in st.span.travel.iter_mut().enumerate() {
+                    *tr += (s.axes[a] - p.axes[a]).abs();
+                }
+                let want = b.lead_mm * 1e6;
+                let dr = (acc - ap).abs() / 360_000.0;
+                for k in 0..AXES {
+                    let dp = (s.axes[k] - p.axes[k]).abs() as f64 / self.div[k];
+                    let locked = dp > 100.0 && dr > 1e-6 && ((dp / dr) - want).abs() <= 0.03 * want;
+                    match (locked, &mut st.open[k]) {
+                        (true, None) => {
+                            let mut span = Span { ends: [Some(held(&p)), None], ..Span::default() };
+                            for (a, tr) in span.travel.iter_mut().enumerate() {
+                                *tr += (s.axes[a] - p.axes[a]).abs();
+                            }
+                            st.open[k] = Some((tp, span));
+                        }
+                        (true, Some((_, span))) => {
+                            for (a, tr) in span.travel.iter_mut().enumerate() {
+                                *tr += (s.axes[a] - p.axes[a]).abs();
+                            }
+                        }
+                        (false, Some(_)) => {
+                            if let Some((a0, mut span)) = st.open[k].take() {
+                                span.ends[1] = Some(held(&p));
+                                st.parts[k].push((a0, tp, span));
+                            }
+                        }
+                        (false, None) => {}
+                    }
+                }
+            }
+            st.prev = Some((t, *s, acc));
+        }
+        self.prev = Some((t, *s));
+    }
+
+    /// The key points, the spans (in the order given) and, for each lead block, its locked
+    /// parts (start, end, span) of the axis that travels furthest in it.
+    pub fn finish(mut self) -> (KeyPoints, Vec<Span>, Vec<Vec<LeadPart>>) {
+        let last = self.prev.map(|p| held(&p.1));
+        for o in &mut self.out {
+            for e in &mut o.ends {
+                if e.is_none() {
+                    *e = last;
+                }
+            }
+        }
+        let mut lead_out = Vec::new();
+        for mut st in self.lead_state {
+            let Some(slot) = st.span.furthest() else {
+                lead_out.push(Vec::new());
+                continue;
+            };
+            let mut parts = std::mem::take(&mut st.parts[slot]);
+            if let (Some((a0, mut span)), Some((tl, p, _))) = (st.open[slot].take(), st.prev) {
+                span.ends[1] = Some(held(&p));
+                parts.push((a0, tl, span));
+            }
+            parts.retain(|w| w.1 - w.0 >= 20_000);
+            lead_out.push(parts);
+        }
+        (self.keys.finish(), self.out, lead_out)
+    }
+}
+
+impl TraceSink for Survey {
+    fn start(&mut self, _meta: &TraceMeta) {}
+    fn event(&mut self, ev: &TraceEvent) {
+        let t = ev.t_us as i64;
+        self.keys.event(t, &ev.event);
+        if let Event::Sample(s) = &ev.event {
+            self.sample(t, s);
+        }
+    }
+}

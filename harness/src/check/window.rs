@@ -1,0 +1,216 @@
+//! The reference's samples as a sliding window: pulled on demand from the reference run (a
+//! trace in memory, or the engine running on another thread), dropped once the comparison has
+//! moved past them. A comparison of any length holds only the samples around the recorded time
+//! (± the widest window of the tolerances), never the whole run.
+
+use std::sync::mpsc::{Receiver, SyncSender};
+
+use nc_engine::trace::{Event, Sample, TraceEvent, TraceMeta, TraceSink};
+
+use super::reference::unwrap_delta;
+
+/// Samples sent at once by a [`ChannelSink`].
+const BATCH: usize = 2048;
+
+/// Where the samples come from.
+pub(crate) enum Feed<'a> {
+    /// The events of a trace in memory.
+    Trace(std::slice::Iter<'a, TraceEvent>),
+    /// Batches of samples from a reference run on another thread ([`ChannelSink`]).
+    Channel(Receiver<Vec<(i64, Sample)>>),
+    /// Nothing more.
+    Done,
+}
+
+/// A window of the reference's samples, in time order.
+pub struct Window<'a> {
+    /// Sample times, µs.
+    pub t: Vec<i64>,
+    /// Samples.
+    pub s: Vec<Sample>,
+    /// The cumulative unwrapped spindle angle at each sample, milli-degrees (from the run's first
+    /// sample, as if no sample had been dropped).
+    pub cum: Vec<f64>,
+    /// The index of the last lookup: recorded times mostly grow, so the next one starts there.
+    pub hint: usize,
+    /// The last answers of [`Window::first_at_or_after`] and [`Window::first_after`].
+    hints: [usize; 5],
+    /// Samples dropped so far: the index of `t[0]` in the whole run.
+    pub base: usize,
+    feed: Feed<'a>,
+    last: Option<(i64, Sample, f64)>,
+    /// Most samples held at once (a figure for the memory bound).
+    pub peak: usize,
+}
+
+impl<'a> Window<'a> {
+    /// A window fed by `feed`.
+    pub(crate) fn new(feed: Feed<'a>) -> Window<'a> {
+        Window {
+            t: Vec::new(),
+            s: Vec::new(),
+            cum: Vec::new(),
+            hint: 0,
+            hints: [0; 5],
+            base: 0,
+            feed,
+            last: None,
+            peak: 0,
+        }
+    }
+
+    fn push(&mut self, t: i64, s: Sample) {
+        let acc = match self.last {
+            None => s.spindle_mdeg as f64,
+            Some((tp, p, acc)) => {
+                acc + unwrap_delta(p.spindle_mdeg, p.spindle_mrpm, s.spindle_mdeg, s.spindle_mrpm, t - tp)
+            }
+        };
+        self.last = Some((t, s, acc));
+        self.t.push(t);
+        self.s.push(s);
+        self.cum.push(acc);
+        self.peak = self.peak.max(self.t.len());
+    }
+
+    /// Pulls the next samples; false when the run has no more.
+    fn pull(&mut self) -> bool {
+        match &mut self.feed {
+            Feed::Trace(it) => {
+                for e in it.by_ref() {
+                    if let Event::Sample(s) = &e.event {
+                        let (t, s) = (e.t_us as i64, *s);
+                        self.push(t, s);
+                        return true;
+                    }
+                }
+                self.feed = Feed::Done;
+                false
+            }
+            Feed::Channel(rx) => match rx.recv() {
+                Ok(batch) => {
+                    for (t, s) in batch {
+                        self.push(t, s);
+                    }
+                    true
+                }
+                Err(_) => {
+                    self.feed = Feed::Done;
+                    false
+                }
+            },
+            Feed::Done => false,
+        }
+    }
+
+    /// Pulls until a sample later than `t` is held (or the run has no more).
+    pub fn ensure(&mut self, t: i64) {
+        while self.t.last().is_none_or(|&l| l <= t) {
+            if !self.pull() {
+                break;
+            }
+        }
+    }
+
+    /// Drops the samples before the last one at or before `floor` (nothing at or after `floor`
+    /// is looked up any more). Amortised: the front is dropped once it is at least half.
+    pub fn prune(&mut self, floor: i64) {
+        if self.t.len() < 8192 || self.t[4096] > floor {
+            return;
+        }
+        let k = self.t.partition_point(|&x| x <= floor);
+        let drop = k.saturating_sub(1);
+        if drop >= 4096 && drop * 2 >= self.t.len() {
+            self.t.drain(..drop);
+            self.s.drain(..drop);
+            self.cum.drain(..drop);
+            self.base += drop;
+            self.hint = self.hint.saturating_sub(drop);
+            for h in &mut self.hints {
+                *h = h.saturating_sub(drop);
+            }
+        }
+    }
+
+    /// The index of the first sample at or after `t` (`t.partition_point(|x| x < t)`), found by
+    /// walking from the last answer of lookup `slot` (0..5, one per kind of time looked up):
+    /// times looked up mostly grow.
+    pub fn first_at_or_after_in(&mut self, slot: usize, t: i64) -> usize {
+        let k = walk(&self.t, self.hints[slot], |x| x < t);
+        self.hints[slot] = k;
+        k
+    }
+
+    /// The index of the first sample after `t` (`t.partition_point(|x| x <= t)`), as
+    /// [`Window::first_at_or_after_in`].
+    pub fn first_after_in(&mut self, slot: usize, t: i64) -> usize {
+        let k = walk(&self.t, self.hints[slot], |x| x <= t);
+        self.hints[slot] = k;
+        k
+    }
+
+    /// [`Window::first_at_or_after_in`] of the envelope's start.
+    pub fn first_at_or_after(&mut self, t: i64) -> usize {
+        self.first_at_or_after_in(0, t)
+    }
+
+    /// [`Window::first_after_in`] of the envelope's end.
+    pub fn first_after(&mut self, t: i64) -> usize {
+        self.first_after_in(1, t)
+    }
+}
+
+/// A sink that sends the samples of a run, in batches, to a [`Window`] on another thread; it
+/// asks the run to stop once the window is gone.
+pub struct ChannelSink {
+    tx: SyncSender<Vec<(i64, Sample)>>,
+    buf: Vec<(i64, Sample)>,
+    gone: bool,
+}
+
+impl ChannelSink {
+    /// A sink sending into `tx`.
+    pub fn new(tx: SyncSender<Vec<(i64, Sample)>>) -> ChannelSink {
+        ChannelSink { tx, buf: Vec::with_capacity(BATCH), gone: false }
+    }
+
+    /// Sends what is left.
+    pub fn flush(&mut self) {
+        if !self.buf.is_empty() && !self.gone {
+            let b = std::mem::take(&mut self.buf);
+            self.gone = self.tx.send(b).is_err();
+        }
+    }
+}
+
+impl TraceSink for ChannelSink {
+    fn start(&mut self, _meta: &TraceMeta) {}
+    fn event(&mut self, ev: &TraceEvent) {
+        if let Event::Sample(s) = &ev.event {
+            self.buf.push((ev.t_us as i64, *s));
+            if self.buf.len() >= BATCH {
+                self.flush();
+                self.buf = Vec::with_capacity(BATCH);
+            }
+        }
+    }
+    fn wants_stop(&self) -> bool {
+        self.gone
+    }
+}
+
+/// `v.partition_point(before)` found by walking from `from` (at most 64 steps, else a binary
+/// search).
+fn walk(v: &[i64], from: usize, before: impl Fn(i64) -> bool) -> usize {
+    let mut k = from.min(v.len());
+    for _ in 0..64 {
+        if k < v.len() && before(v[k]) {
+            k += 1;
+        } else if k > 0 && !before(v[k - 1]) {
+            k -= 1;
+        } else {
+            return k;
+        }
+    }
+    v.partition_point(|&x| before(x))
+}
