@@ -405,7 +405,7 @@ class Trace:
             pass  # reset / E-stop: LinuxCNC stops the spindle itself, no function
         elif sp != sr:
             if kind == "g331" and sp != 0 and sr != 0:
-                pass  # the rigid tap's reversals are motion's own (the restore: below)
+                pass  # the rigid tap's reversals are motion's own
             elif kind and kind.startswith("cycle") and self.cur_is_running(r):
                 if sp != 0 and sr == 0 and self.program_end_stop():
                     self.pending_stop = t  # the cycle's own stop, or the program end's (below)
@@ -420,15 +420,6 @@ class Trace:
                 self.spindle_change(t, sp, sr)
             if sr != 0 and sp == 0:
                 self.signal(t, "ZSP", 0)
-        if kind == "g331" and self.g331_dir:
-            # The final reversal: the original sense was commanded as the tap passed the start;
-            # the restoring M3/M4 is where the spindle turns that way again, as the reference has it.
-            if r["rpm"] * self.g331_dir < 0:
-                self.g331_reversed = True
-            elif getattr(self, "g331_reversed", False) and r["rpm"] * self.g331_dir > 0:
-                self.function(t, "M", 3 if self.g331_dir > 0 else 4)
-                self.g331_dir = None
-                self.g331_reversed = False
         for pin, on_code in (("flood", 8), ("mist", 7)):
             if p[pin] != r[pin]:
                 code = on_code if r[pin] else 9
@@ -479,7 +470,6 @@ class Trace:
         if kind in ("g331", "g33"):
             self.set_phase(t, "cutting")
             self.g331_dir = (spin(r) or None) if kind == "g331" else None
-            self.g331_reversed = False
         elif kind:
             self.set_phase(t, "positioning")
         self.cycle_since = r["cycle"]

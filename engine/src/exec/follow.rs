@@ -72,7 +72,7 @@ impl Exec<'_> {
                 target[f.axis] = f.target;
                 self.start_motion(target, Path::Rapid { profiles, backlash });
             }
-            FollowKind::Brake { brake_us, restore } => {
+            FollowKind::Brake { brake_us } => {
                 if rpm == 0.0 {
                     return;
                 }
@@ -101,19 +101,8 @@ impl Exec<'_> {
                 let profile = profile.still_until(ceil_to(now + rest, period.max(1)) - now);
                 let travel = profile.dist.round() as Nm;
                 target[f.axis] = self.cmd[f.axis] + d.signum() * travel;
-                match restore {
-                    // On through zero to S × the spindle override, at the spindle's ramp.
-                    Some((r, forward)) => {
-                        let r = (r as f64 * self.spindle_override as f64 / 100.0)
-                            .min(self.cfg.spindle_max_rpm as f64)
-                            .max(1.0);
-                        self.spindle.command(now, if forward { r } else { -r });
-                    }
-                    None => {
-                        self.spindle.command(now, 0.0);
-                        self.spindle.seg_accel = Some(rpm.abs() / total as f64);
-                    }
-                }
+                self.spindle.command(now, 0.0);
+                self.spindle.seg_accel = Some(rpm.abs() / total as f64);
                 self.stall_angle = None;
                 self.spindle_changed();
                 let mut profiles = [Profile::still(); AXES];

@@ -78,7 +78,7 @@ pub fn follow_tap(c: &FollowTap, out: &mut Vec<Step>) {
     out.push(follow(c.end, FollowKind::Cut, c.not_turning));
     out.push(follow(
         c.end.saturating_add(dir * c.allowance_nm),
-        FollowKind::Brake { brake_us: c.brake_us, restore: None },
+        FollowKind::Brake { brake_us: c.brake_us },
         c.overshoot,
     ));
     if let Some(zsp) = &zsp {
@@ -86,26 +86,22 @@ pub fn follow_tap(c: &FollowTap, out: &mut Vec<Step>) {
         out.push(zsp.clone());
     }
     out.push(Step::Phase(Phase::Retract));
-    let (code, effect) = if c.forward { (3, SpindleEffect::Forward) } else { (4, SpindleEffect::Reverse) };
     if c.linuxcnc {
-        // Out behind the reversed spindle through the start; there the original sense is
-        // commanded (tp.c RETRACTION → FINAL_REVERSAL) and the spindle turns through zero without
-        // a stop while the tap brakes with it past the start (the same allowance), then back
-        // unsynchronised (FINAL_PLACEMENT; shared/linuxcnc-real README items 5 and 7; through
-        // the adapter, LinuxCNC's spindle never stands: no zero-speed report, DEC-147).
+        // Out behind the reversed spindle through the start, braking with it past the start (the
+        // same allowance), then back unsynchronised (shared/linuxcnc-real README items 5 and 7).
         out.push(follow(c.start, FollowKind::Through { rpm: c.rpm, forward: !c.forward }, c.overshoot));
         out.push(follow(
             c.start.saturating_sub(dir * c.allowance_nm),
-            FollowKind::Brake { brake_us: c.brake_us, restore: Some((c.rpm, c.forward)) },
+            FollowKind::Brake { brake_us: c.brake_us },
             c.overshoot,
         ));
-        out.push(Step::Function { letter: 'M', code, effect });
         out.push(follow(c.start, FollowKind::Unsynced, c.overshoot));
     } else {
         out.push(follow(c.start, FollowKind::Return { rpm: c.rpm, forward: !c.forward }, c.overshoot));
-        out.extend(zsp);
-        out.push(Step::Function { letter: 'M', code, effect });
     }
+    out.extend(zsp);
+    let (code, effect) = if c.forward { (3, SpindleEffect::Forward) } else { (4, SpindleEffect::Reverse) };
+    out.push(Step::Function { letter: 'M', code, effect });
     out.push(Step::HoldSuppress(false));
 }
 
@@ -144,7 +140,7 @@ mod tests {
             kinds,
             vec![
                 (-20_000_000, FollowKind::Cut),
-                (-70_000_000, FollowKind::Brake { brake_us: 200_000, restore: None }),
+                (-70_000_000, FollowKind::Brake { brake_us: 200_000 }),
                 (5_000_000, FollowKind::Return { rpm: 300, forward: false }),
             ]
         );

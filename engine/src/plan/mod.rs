@@ -152,10 +152,6 @@ pub enum FollowKind {
     Brake {
         /// Brake time, µs.
         brake_us: Micros,
-        /// LinuxCNC's final reversal: instead of to rest, the spindle is commanded on to this
-        /// speed (rpm, before the override) in this sense (`true`: M03) as the tap passes the
-        /// start, and turns through zero at its ramp; the axis brakes behind it the same way.
-        restore: Option<(u32, bool)>,
     },
     /// The spindle, at rest, turns at `rpm` (`forward`: M03 sense) with its speed-mode
     /// acceleration; the axis follows it to the target, where both come to rest.
