@@ -325,7 +325,9 @@ class Trace:
                     line = ie["line"]
                 self.alarm(t, alarm_code(m["text"]), m["text"].strip(), line)
             self.row(prev, r, t)
-            if getattr(self, "pause_pending", False) and not any(abs(r[a] - prev[a]) > 1e-9 for a in "XYZ"):
+            # (not while a synchronised move waits for its index: LinuxCNC defers the pause)
+            if (getattr(self, "pause_pending", False) and not r["index"]
+                    and not any(abs(r[a] - prev[a]) > 1e-9 for a in "XYZ")):
                 self.pause_pending = False
                 self.signal(t, "SPL", 1)
                 self.signal(t, "STL", 0)
@@ -396,9 +398,15 @@ class Trace:
             # a synchronised move starts by arming the encoder index: its line has begun
             nxt = self.next_sync_line()
             if nxt is not None and nxt != self.cur:
+                self.armed_from = self.cur
                 self.enter_line(t, nxt, r)
-        if line and line != self.cur:
+        if line and line == getattr(self, "armed_from", None):
+            pass  # motion still names the line before the armed synchronised move: not back to it
+        elif line and line != self.cur:
+            self.armed_from = None
             self.enter_line(t, line, r)
+        elif line == self.cur:
+            self.armed_from = None
         kind = self.prog.kind.get(self.cur) if self.cur else None
         sp, sr = spin(p), spin(r)
         if sp != sr and self.stopped_by:
@@ -498,6 +506,10 @@ class Trace:
         mtype = int(r["mtype"])
         ph = self.phase
         if kind == "g33":
+            # as the reference: a G33 line is its cutting phase from its start (the index wait
+            # included) to the next line
+            if ph != "cutting":
+                self.set_phase(t, "cutting")
             return
         if kind == "g331":
             if ph == "cutting" and self.g331_dir and r["rpm"] * self.g331_dir < 0:
