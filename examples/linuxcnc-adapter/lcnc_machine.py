@@ -217,12 +217,15 @@ net spindle-speed-drive limit_speed.out => stall.in0
 setp stall.in1 0
 setp stall.sel 0
 net spindle-speed-limited stall.out => sim_spindle.velocity-cmd spindle_mass.in
-net spindle-rpm-filtered spindle_mass.out near_speed.in2
+net spindle-rpm-filtered spindle_mass.out
 net spindle-rpm-filtered rpm_rps.in
 net spindle-rps-filtered rpm_rps.out spindle.0.speed-in
-setp near_speed.scale 1.1
-setp near_speed.difference 10
+# at-speed when the ramp has reached the command (the reference's machine: LCNC-MOT-01, DEC-143);
+# a stalled spindle never is
+setp near_speed.scale 1.0
+setp near_speed.difference 0.5
 net spindle-speed-cmd => near_speed.in1
+net spindle-speed-limited => near_speed.in2
 net spindle-at-speed near_speed.out spindle.0.at-speed
 addf limit_speed servo-thread
 addf stall servo-thread

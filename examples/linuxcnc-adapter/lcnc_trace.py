@@ -526,6 +526,9 @@ class Trace:
         dwell_p = self.prog.p.get(self.cur, 0.0)
         if ph in ("positioning", "retract") and moving and mtype == MOTION_FEED and d < 0:
             self.set_phase(t, "cutting")
+        elif ph == "retract" and moving and abs(d) < 1e-9 and kind.startswith("cycle"):
+            # an L repeat (or the next hole of the same line) moving to its hole
+            self.set_phase(t, "positioning")
         elif ph == "retract" and moving and d < 0 and kind in ("cycle73", "cycle83"):
             # a peck cycle's way back down (G83: the rapid to just above the last depth) is part
             # of the next peck, as the reference marks it
