@@ -315,9 +315,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         text.push_str(&format!("warning: {warnings} faulty row(s) of {trace_name} left out (--lenient)\n"));
     }
     print!("{}", crate::diag::printable_lines(&text));
-    let write = |p: &PathBuf, body: String| {
-        std::fs::write(p, body).map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))
-    };
+    let write = |p: &PathBuf, body: String| super::write_file(p, &body);
     if let Some(p) = &args.report {
         write(p, report::json(&rep, &input_name, &trace_name))?;
     }
@@ -393,12 +391,7 @@ pub fn calibrate(args: &CalibrateArgs) -> u8 {
         let events: Vec<TraceEvent> = importer.collect::<Result<_, _>>().map_err(|e| import_error(&e))?;
         let est = check::calibrate::estimate(&machine, &axes, &events);
         let file = check::calibrate::params_file(&machine, &est, &display_name(&args.trace));
-        match &args.out {
-            Some(p) => std::fs::write(p, file)
-                .map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))?,
-            None => print!("{file}"),
-        }
-        Ok(())
+        super::write_or_print(args.out.as_deref(), &file)
     };
     match inner() {
         Ok(()) => EXIT_OK,

@@ -110,9 +110,7 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
         report.scenarios.push(v);
     }
     print!("\n{}", crate::diag::printable_lines(&report.summary()));
-    let write = |p: &PathBuf, body: String| {
-        std::fs::write(p, body).map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))
-    };
+    let write = |p: &PathBuf, body: String| super::write_file(p, &body);
     if let Some(p) = &args.junit {
         write(p, report.junit())?;
     }

@@ -89,6 +89,26 @@ pub enum Command {
     Serve,
 }
 
+/// Writes a report or generated file the user named; a failure is an input error naming it.
+pub(crate) fn write_file(path: &std::path::Path, body: &str) -> Result<(), crate::diag::InputError> {
+    std::fs::write(path, body)
+        .map_err(|e| crate::diag::InputError::new(display_name(path), format!("cannot write: {e}")))
+}
+
+/// Writes `body` to `out` when given, else to standard output.
+pub(crate) fn write_or_print(
+    out: Option<&std::path::Path>,
+    body: &str,
+) -> Result<(), crate::diag::InputError> {
+    match out {
+        Some(p) => write_file(p, body),
+        None => {
+            print!("{body}");
+            Ok(())
+        }
+    }
+}
+
 /// Entry point of the binary: parses the command line, runs, and returns the exit status.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();

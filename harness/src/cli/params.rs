@@ -32,12 +32,7 @@ pub fn run(args: &ParamsArgs) -> u8 {
             err
         })?;
         let file = ini::params_file(&ini::map(&parsed), &name);
-        match &args.out {
-            Some(p) => std::fs::write(p, file)
-                .map_err(|e| InputError::new(display_name(p), format!("cannot write: {e}")))?,
-            None => print!("{file}"),
-        }
-        Ok(())
+        super::write_or_print(args.out.as_deref(), &file)
     };
     match inner() {
         Ok(()) => EXIT_OK,
