@@ -75,6 +75,20 @@ class MachineConfig(unittest.TestCase):
         _, hal, _ = lcnc_machine.machine_config([{"id": "nc.spindle_ramp_ms", "value": 20000}])
         self.assertIn("setp limit_speed.maxv 300\n", hal)  # 6000 rpm in 20 s
 
+    def test_the_machine_is_the_references(self):
+        # at speed when the ramp reaches the command (a stalled spindle never is), and [TRAJ]
+        # caps at the axes' combined limits (the reference's G0 is limited by its axes only)
+        ini, hal, _ = lcnc_machine.machine_config([])
+        self.assertIn("net spindle-speed-limited => near_speed.in2", hal)
+        self.assertIn("setp near_speed.scale 1.0", hal)
+        v = [float(l.split("=")[1]) for l in ini.splitlines() if l.startswith("MAX_VELOCITY")]
+        cap = next(float(l.split("=")[1]) for l in ini.splitlines() if l.startswith("MAX_LINEAR_VELOCITY"))
+        self.assertGreater(cap, max(v))
+        exact, _, _ = lcnc_machine.machine_config([], "G61.1", "exact")
+        self.assertIn("ARC_BLEND_OPTIMIZATION_DEPTH = 1", exact)
+        self.assertIn("G61.1", exact)
+        self.assertNotIn("ARC_BLEND_OPTIMIZATION_DEPTH", ini)
+
     def test_what_linuxcnc_cannot_have_is_not_applicable(self):
         for params, says in [
             ([{"id": "nc.rapid_mm_min", "axis": "Z", "value": 3000}], "slowest axis gives 3000"),
@@ -138,6 +152,36 @@ class Recording(unittest.TestCase):
         self.assertEqual(ev[-1]["kind"], "end")
         times = [e["t_us"] for e in ev]
         self.assertEqual(times, sorted(times))
+
+    def test_a_pause_is_reported_where_the_axes_stand_still(self):
+        # the task reports paused at cycle 114 while the rapid still moves until 116
+        rows = [row(c) for c in range(100, 110)]
+        for k, z in enumerate([0.5, 1.0, 1.5, 2.0, 2.4, 2.6, 2.7, 2.7, 2.7, 2.7, 2.7, 2.7]):
+            rows.append(row(110 + k, z=z, rpm=30, cmd=500, on=1, fwd=1, line=2, mtype=1))
+        agent = {"c_run": 105, "given": [], "messages": [],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 114, "interp": 2, "paused": True, "task": 4}],
+                 "end": {"reason": "time_limit", "cycle": 121, "settled": 121}}
+        ev = lcnc_trace.Trace("G21 M3 S500\nG0 Z5\nM2\n", rows, agent, self.CFG, 1000).build()
+        spl = [e["t_us"] for e in ev if e["kind"] == "signal" and e["name"] == "SPL" and e["value"] == 1]
+        # not at the paused report (cycle 114, 4 ms) but at cycle 117, the first without motion
+        self.assertEqual(spl, [7000])
+
+    def test_the_line_before_an_armed_move_is_not_entered_again(self):
+        ev = lcnc_trace.Trace(self.PROGRAM, self.rows_line_lagging(), self.AGENT, self.CFG, 1000).build()
+        blocks = [e["line"] for e in ev if e["kind"] == "block"]
+        self.assertEqual(blocks, sorted(blocks), blocks)
+
+    AGENT = {"c_run": 105, "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4}],
+             "given": [], "messages": [], "end": {"reason": "program_end", "cycle": 127, "settled": 127}}
+
+    def rows_line_lagging(self):
+        # motion still names line 2 for a period after the index is armed for line 3
+        rows = self.rows()
+        for r in rows:
+            if r["cycle"] == 121:
+                r["line"] = 2
+        return rows
 
     def test_exact_decimals(self):
         for x, digits, want in [(0.000001, 6, "0.000001"), (-12.5, 6, "-12.5"), (50.0, 6, "50"),
