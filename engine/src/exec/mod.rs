@@ -138,6 +138,8 @@ pub(crate) struct Exec<'a> {
     following: bool,
     /// The `Step::Follow` that started a motion, with that motion's start time (`resync`).
     follow_step: Option<(Micros, crate::plan::Follow)>,
+    /// The law the last accelerated thread pass settled on (DEC-147's tracking segments).
+    sync_lock: Option<thread::SyncLock>,
     /// A braking coast cut short at the allowance (NC-1050): when it ends (µs), the spindle's
     /// speed then (signed rpm) and its braking deceleration (rpm/µs).
     coast: Option<(Micros, f64, f64)>,
@@ -228,6 +230,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         css: None,
         following: false,
         follow_step: None,
+        sync_lock: None,
         coast: None,
         follow_v: None,
         atspeed_next_feed: false,

@@ -5,6 +5,7 @@ use crate::units::{ceil_to, Micros};
 
 mod catch_up;
 mod follow;
+mod track;
 pub use catch_up::catch_up_lag;
 pub use follow::Ramp;
 
@@ -19,6 +20,21 @@ struct Piece {
     s0: f64,
     v0: f64,
     a: f64,
+}
+
+/// Where the increasing `f` reaches `target` within `[0, hi]`, by `steps` halvings: the last
+/// point below and the first at or above it.
+fn bisect(f: impl Fn(f64) -> f64, target: f64, hi: f64, steps: u32) -> (f64, f64) {
+    let (mut lo, mut hi) = (0.0, hi);
+    for _ in 0..steps {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) >= target {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    (lo, hi)
 }
 
 /// Distance travelled (nm, ≥ 0) against time since the motion started (µs).

@@ -14,12 +14,36 @@ use super::{Active, Exec};
 use crate::alarm::{Alarm, AlarmKind};
 use crate::plan::{PassLaw, Step, ThreadPass};
 use crate::trace::Phase;
-use crate::units::{ceil_to, Micros};
+use crate::units::{ceil_to, Micros, Nm};
+
+/// The law an accelerated pass settles on once at speed, for the segments that follow it without
+/// a new index (DEC-147): the drive axis `lead × revolutions since angle0 − lag` from `along0`,
+/// in the sense `dir`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct SyncLock {
+    /// The spindle's angle when the pass started, deg (unwrapped).
+    angle0: f64,
+    /// The sense the spindle turns (±1).
+    sign: f64,
+    /// The drive axis' position when the pass started, nm.
+    along0: Nm,
+    /// The sense the drive axis travels (±1).
+    dir: f64,
+    /// Lead, nm per revolution.
+    lead: f64,
+    /// How far the ramp left the axis behind the spindle, nm (v²/2a).
+    lag: f64,
+}
 
 impl Exec<'_> {
     /// Starts a thread pass, or waits first (for the spindle's speed change to end, for the start
     /// angle).
     pub(super) fn start_thread(&mut self, p: ThreadPass) {
+        if p.law == PassLaw::Segments && p.n > 2 {
+            self.thread_segments(p);
+            return;
+        }
+        let tracking = p.law == PassLaw::Tracking;
         let now = self.now;
         let period = self.cfg.period_us.max(1);
         let (angle, rpm) = self.spindle_at(now);
@@ -28,7 +52,7 @@ impl Exec<'_> {
             return;
         }
         // A thread is cut at a steady speed: wait for the end of a speed change.
-        if self.spindle.ramp(now).is_some() {
+        if self.spindle.ramp(now).is_some() && !tracking {
             self.steps.push_front(Step::Thread(p));
             self.active = Active::Until(ceil_to(self.spindle.ramp_end().max(now + 1), period));
             return;
@@ -70,7 +94,7 @@ impl Exec<'_> {
                     return;
                 }
             }
-            PassLaw::Accelerated { room: None } => {
+            PassLaw::Accelerated { room: None } | PassLaw::Segments | PassLaw::Tracking => {
                 v = v.min(vmax);
                 v_top = v;
             }
@@ -90,7 +114,7 @@ impl Exec<'_> {
         let turned = angle * rpm.signum() / 360.0 - p.phase_rev + lag_rev;
         let past = turned - turned.floor();
         let n0 = if past > 0.5 { past - 1.0 } else { past };
-        if n0.abs() > rev_us * 0.5 + 1e-9 {
+        if n0.abs() > rev_us * 0.5 + 1e-9 && !tracking {
             // Not at the start angle (to within the µs its instant is rounded to): wait for the
             // next one. The control arms its index latch when the pass begins: an index that
             // has passed is not used. Checked again when the wait ends (the speed may change).
@@ -108,7 +132,24 @@ impl Exec<'_> {
             PassLaw::Locked => {
                 Profile::catch_up(dist, v, acc, (lag_rev - n0) / rev_us, accel, period, now % period)
             }
-            PassLaw::Accelerated { .. } => Profile::thread(dist, v, accel, period, now % period),
+            PassLaw::Tracking => {
+                let behind = self.sync_lock.map(|l| {
+                    let law = l.lead * (angle - l.angle0) * l.sign / 360.0 - l.lag;
+                    law - (start[p.along] - l.along0) as f64 * l.dir
+                });
+                Profile::tracking(dist, v, behind.unwrap_or(0.0), accel, period, now % period)
+            }
+            PassLaw::Accelerated { .. } | PassLaw::Segments => {
+                self.sync_lock = Some(SyncLock {
+                    angle0: angle,
+                    sign: rpm.signum(),
+                    along0: start[p.along],
+                    dir,
+                    lead,
+                    lag: v * v / (2.0 * accel),
+                });
+                Profile::thread(dist, v, accel, period, now % period)
+            }
         };
         let (knots, blend) = super::motion::blended(&knots[..p.n], p.thread, v_top, blend_a);
         // A run-out cut short by its blend ends the pass short of its infeed target.
@@ -129,6 +170,23 @@ impl Exec<'_> {
         // The spindle turns in speed mode: machine lock holds the axes, not the spindle.
         if let Some(m) = &mut self.motion {
             m.lock_spindle = false;
+        }
+    }
+
+    /// A pass through tapers as LinuxCNC runs it (DEC-147): one synchronised segment per pair of
+    /// knots, each ending at rest; the first waits for the index and ramps, the others track.
+    fn thread_segments(&mut self, p: ThreadPass) {
+        for k in (0..p.n - 1).rev() {
+            let mut target = p.target;
+            if k + 2 < p.n {
+                target[p.along] = p.knots[k + 1].0.round() as Nm;
+                target[p.across] = p.knots[k + 1].1.round() as Nm;
+            }
+            let mut knots = [(0.0, 0.0); 4];
+            knots[0] = p.knots[k];
+            knots[1] = p.knots[k + 1];
+            let law = if k == 0 { PassLaw::Accelerated { room: None } } else { PassLaw::Tracking };
+            self.steps.push_front(Step::Thread(ThreadPass { target, knots, n: 2, thread: 0, law, ..p }));
         }
     }
 

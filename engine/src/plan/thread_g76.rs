@@ -145,7 +145,8 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
             lead_nm: c.pitch as f64,
             dlead_nm: 0.0,
             phase_rev: 0.0,
-            law: PassLaw::Accelerated { room: None },
+            // Tapers are segments of their own, each ending at rest (DEC-147).
+            law: if n > 2 { PassLaw::Segments } else { PassLaw::Accelerated { room: None } },
             retract: None,
             alarm: AlarmKind::LcncSpindle,
         }));

@@ -33,6 +33,16 @@ pub enum PassLaw {
         /// (NC-1077); with `None` the speed is limited to the maximum cutting feed.
         room: Option<(Nm, Nm)>,
     },
+    /// LinuxCNC's pass through its tapers (G76 with L, DEC-147): each segment between knots is
+    /// a synchronised move of its own that ends at rest (LinuxCNC's exact stop between
+    /// non-tangent segments); the first starts at the index as `Accelerated { room: None }`, each
+    /// next one at once as [`PassLaw::Tracking`].
+    Segments,
+    /// A synchronised segment after the first of a run (DEC-147): it waits neither for a steady
+    /// speed nor for the index, and from rest catches up with the law the first segment settled
+    /// on (lead × revolutions since its start − its ramp's lag), as LinuxCNC's position
+    /// synchronisation tracks it: the spindle's speed plus √(error × acceleration).
+    Tracking,
 }
 
 /// Where a thread retract goes on feed hold: the short axis back to the cycle start, then the

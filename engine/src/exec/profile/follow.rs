@@ -78,16 +78,8 @@ impl Profile {
                 g(p, 0.0)
             };
             if end_g >= dist {
-                let (mut lo, mut hi) =
-                    (0.0, if len.is_finite() { len } else { (dist - g(p, 0.0)) / p.v0 + 1.0 });
-                for _ in 0..100 {
-                    let mid = 0.5 * (lo + hi);
-                    if g(p, mid) >= dist {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
+                let span = if len.is_finite() { len } else { (dist - g(p, 0.0)) / p.v0 + 1.0 };
+                let (_, hi) = super::bisect(|t| g(p, t), dist, span, 100);
                 found = Some((k, hi));
                 break;
             }
