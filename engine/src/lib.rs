@@ -48,6 +48,9 @@ pub struct RunOptions {
     pub auto_cycle_start: bool,
     /// Operator actions and faults.
     pub inputs: InputSchedule,
+    /// The spindle's angle when the run starts, degrees (0: at its index). A check starts the
+    /// reference's spindle where the recorded one stood, so that waits for the index agree.
+    pub spindle_angle_deg: f64,
 }
 
 impl Default for RunOptions {
@@ -57,6 +60,7 @@ impl Default for RunOptions {
             time_limit_us: 7 * 24 * 3600 * 1_000_000,
             auto_cycle_start: true,
             inputs: InputSchedule::default(),
+            spindle_angle_deg: 0.0,
         }
     }
 }

@@ -146,6 +146,7 @@ fn knd_g93_inputs_at_any_phase_end_the_run_and_keep_the_invariants() {
                 sample_us: 1000,
                 time_limit_us: 120_000_000,
                 auto_cycle_start: true,
+                ..RunOptions::default()
             };
             let t = run("knd-lathe", &[("nc.backlash_mm", Some('Z'), 0.02)], G93, &opts);
             assert!(t.end().is_some(), "{input:?} at {at_ms} ms: no end");

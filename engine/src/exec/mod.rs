@@ -183,7 +183,10 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         lock_offset: [0; AXES],
         last_dir: [0; AXES],
         motor_dir: [0; AXES],
-        spindle: Spindle::new(if accel > 0.0 { accel } else { f64::INFINITY }),
+        spindle: Spindle {
+            angle0: if opts.spindle_angle_deg.is_finite() { opts.spindle_angle_deg } else { 0.0 },
+            ..Spindle::new(if accel > 0.0 { accel } else { f64::INFINITY })
+        },
         pre_rigid_rpm: None,
         s_cmd: 0,
         signals: Signals::default(),

@@ -485,6 +485,7 @@ impl Case {
             time_limit_us: TIME_LIMIT_US,
             auto_cycle_start: false,
             inputs: self.schedule(),
+            ..RunOptions::default()
         }
     }
 

@@ -175,6 +175,9 @@ pub fn plan(trace: &Trace, end_us: i64) -> Plan {
     let mut block: Option<(i64, &'static str, f64)> = None;
     let mut phased = false;
     let mut feed: Option<f64> = None;
+    // The motion codes of the blocks read at one instant: a structure (a LinuxCNC loop, a
+    // subroutine call) is read at once, and its steps run after its last line was read.
+    let mut batch: (i64, Vec<String>) = (i64::MIN, Vec::new());
     let mut by_lead = |raw: &mut Vec<Raw>, t0: i64, t1: i64, g: &'static str, f: f64| {
         raw.push(Raw::Lead(lead.len(), g));
         lead.push(LeadBlock { t0, t1, lead_mm: f });
@@ -202,7 +205,11 @@ pub fn plan(trace: &Trace, end_us: i64) -> Plan {
                         by_lead(&mut raw, b0, t, g, f);
                     }
                 }
+                if t != batch.0 {
+                    batch = (t, Vec::new());
+                }
                 if let Some(c) = motion_code(text, lathe) {
+                    batch.1.push(c.clone());
                     code = Some(c);
                 }
                 if let Some(v) = word(text, 'F') {
@@ -217,7 +224,19 @@ pub fn plan(trace: &Trace, end_us: i64) -> Plan {
                 if let Some((a, k, l, g)) = open.take() {
                     raw.push(Raw::Fixed(a, t, k, l, g));
                 }
-                let c = code.as_deref().unwrap_or("");
+                let mut c = code.as_deref().unwrap_or("");
+                // A phase of a synchronised move read within a structure whose last line is
+                // another: the structure's one phase-making code, when it is a synchronised one.
+                if !threads.contains(&c) && !follows.contains(&c) {
+                    let mut phasing =
+                        batch.1.iter().filter(|x| !matches!(x.as_str(), "G0" | "G1" | "G2" | "G3"));
+                    if let Some(only) = phasing.next() {
+                        let synced = threads.contains(&only.as_str()) || follows.contains(&only.as_str());
+                        if synced && phasing.all(|x| x == only) {
+                            c = only.as_str();
+                        }
+                    }
+                }
                 let g = threads.iter().chain(follows).find(|x| **x == c).copied();
                 let kind = if heidenhain && *p == Phase::Cutting {
                     Some((Kind::Thread, true))
@@ -397,5 +416,33 @@ mod tests {
         assert_eq!(motion_code("G98 G21 X5", true), None);
         assert_eq!(motion_code("G92 X0 Y0", false), None, "Fanuc G92 sets coordinates");
         assert_eq!(motion_code("G00 X1 ; G32", true).as_deref(), Some("G0"));
+    }
+
+    fn follows(program: &str) -> usize {
+        let m = nc_engine::Machine::new("linuxcnc").unwrap();
+        let t = m.run_to_trace(&m.parse(program).unwrap(), &nc_engine::RunOptions::default());
+        let end = t.events.last().map_or(0, |e| e.t_us as i64);
+        plan(&t, end).raw.iter().filter(|r| matches!(r, Raw::Fixed(_, _, Kind::Follow, ..))).count()
+    }
+
+    #[test]
+    fn a_synchronised_move_inside_a_loop_is_found() {
+        // A LinuxCNC loop is read at once: its steps run after its last line (`endrepeat`) was
+        // read, so the line before the phases is not the G33.1. Three holes: a cut and a way out
+        // each, as when the lines are written out.
+        let head = "G21 G90 M3 S500\nG0 X0 Y0 Z3\nG91\n";
+        let looped = format!("{head}o100 repeat [3]\n  G33.1 Z-8 K1.25\n  G0 X12 Y4\no100 endrepeat\nM2\n");
+        let flat = format!("{head}{}M2\n", "G33.1 Z-8 K1.25\nG0 X12 Y4\n".repeat(3));
+        assert_eq!(follows(&flat), 6);
+        assert_eq!(follows(&looped), 6);
+        // A loop that also drills: its phases cannot be told apart by the lines, none is taken.
+        let mixed = format!(
+            "{head}o100 repeat [2]\n  G33.1 Z-8 K1.25\n  G81 Z-2 R1 F100\n  G80\no100 endrepeat\nM2\n"
+        );
+        assert_eq!(follows(&mixed), 0);
+        let m = nc_engine::Machine::new("linuxcnc").unwrap();
+        let t = m.run_to_trace(&m.parse(&mixed).unwrap(), &nc_engine::RunOptions::default());
+        let cuts = t.events.iter().filter(|e| matches!(e.event, Event::Phase(Phase::Cutting))).count();
+        assert!(cuts >= 4, "the mixed loop taps and drills twice: {cuts} cuts");
     }
 }

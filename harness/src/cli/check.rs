@@ -79,6 +79,45 @@ pub struct CheckArgs {
     /// Write the report as a self-contained HTML page with plots.
     #[arg(long, value_name = "FILE.html")]
     pub html: Option<PathBuf>,
+
+    /// Where the reference's spindle stands when its run starts, degrees after its index, or
+    /// `recorded` (the default): the angle of the recording's first sample, when it records
+    /// one, so that the waits for the index (G33, G76, G33.1, thread passes) agree.
+    #[arg(long, value_name = "DEG|recorded", default_value = "recorded", value_parser = parse_spindle_angle)]
+    pub spindle_angle: SpindleAngle,
+}
+
+/// `--spindle-angle`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SpindleAngle {
+    /// The recording's first angle (0 when it records none).
+    Recorded,
+    /// This angle, degrees.
+    Deg(f64),
+}
+
+fn parse_spindle_angle(s: &str) -> Result<SpindleAngle, String> {
+    if s == "recorded" {
+        return Ok(SpindleAngle::Recorded);
+    }
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v.abs() <= 360.0 => Ok(SpindleAngle::Deg(v)),
+        _ => Err(format!("`{s}` is not `recorded` or an angle in degrees within ±360")),
+    }
+}
+
+/// The spindle angle of the first sample of `trace`, degrees, when it records one (read no
+/// further than its first `MAX_PEEK` events).
+fn first_recorded_angle(trace: &std::path::Path, opts: &import::Options) -> Option<f64> {
+    const MAX_PEEK: usize = 10_000;
+    let importer = import::open(trace, opts).ok()?;
+    if !check::Carried::of(importer.meta()).angle {
+        return None;
+    }
+    importer.take(MAX_PEEK).map_while(Result::ok).find_map(|e| match e.event {
+        Event::Sample(s) => Some(s.spindle_mdeg as f64 / 1000.0),
+        _ => None,
+    })
 }
 
 /// Carries out `nc-conform check`; returns the exit status (errors are reported on stderr).
@@ -178,6 +217,23 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
                 None,
             )
         };
+    // The recorded stream's format and map.
+    let map = match &args.map {
+        Some(p) => Some(ColumnMap::load(p)?),
+        None => None,
+    };
+    let opts = import::Options {
+        format: args.format.as_deref().and_then(Format::from_name),
+        map: map.as_ref(),
+        lenient: args.lenient,
+    };
+    // The reference's spindle starts where the recorded one stood.
+    let mut run_opts = run_opts;
+    let spindle_start = match args.spindle_angle {
+        SpindleAngle::Deg(d) => Some(d),
+        SpindleAngle::Recorded => first_recorded_angle(&args.trace, &opts),
+    };
+    run_opts.spindle_angle_deg = spindle_start.unwrap_or(0.0);
     // The reference run, replayed as the comparison needs it (never held whole).
     let run = |sink: &mut dyn TraceSink| {
         machine.run(&program, &run_opts, &mut Capped { inner: sink, discrete: 0, samples: 0 });
@@ -218,15 +274,6 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
     }
     // The recorded stream.
-    let map = match &args.map {
-        Some(p) => Some(ColumnMap::load(p)?),
-        None => None,
-    };
-    let opts = import::Options {
-        format: args.format.as_deref().and_then(Format::from_name),
-        map: map.as_ref(),
-        lenient: args.lenient,
-    };
     let mut importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
     // A JSON Lines trace names its dialect: one other than the reference's is a mistake in the
     // command line, not 25 divergences.
@@ -309,7 +356,16 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
     }
     let warnings = importer.warnings().total();
     let trace_name = display_name(&args.trace);
-    let head = format!("{title}\nrecorded: {trace_name}");
+    let mut head = format!("{title}\nrecorded: {trace_name}");
+    match (args.spindle_angle, spindle_start) {
+        (SpindleAngle::Recorded, Some(a)) => {
+            head.push_str(&format!("\nreference spindle: starts at {a:.3}° (the recording's first sample)"))
+        }
+        (SpindleAngle::Deg(a), _) => {
+            head.push_str(&format!("\nreference spindle: starts at {a:.3}° (--spindle-angle)"))
+        }
+        (SpindleAngle::Recorded, None) => {}
+    }
     let mut text = report::summary(&rep, &reference, &head);
     if warnings > 0 {
         text.push_str(&format!("warning: {warnings} faulty row(s) of {trace_name} left out (--lenient)\n"));

@@ -148,6 +148,7 @@ impl Controller for Reference {
             time_limit_us: job.time_limit_us,
             auto_cycle_start: job.auto_cycle_start,
             inputs: InputSchedule::default(),
+            ..RunOptions::default()
         };
         self.run = Some(Run {
             machine,

@@ -133,6 +133,7 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
         time_limit_us: file.options.time_limit_ms.saturating_mul(1000),
         auto_cycle_start: file.options.auto_cycle_start,
         inputs,
+        ..RunOptions::default()
     };
     let expect = expect::resolve(&ctx, &file.expect, &rules[0])?;
     let diagram = diagram(&ctx, &file)?;
