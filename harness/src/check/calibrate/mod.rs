@@ -1,0 +1,383 @@
+//! `nc-conform calibrate`: the machine's own timing, estimated from a recording of a known-good
+//! run, written as a parameter file whose comments say where each value came from and how sure it
+//! is (`docs/checking.md`, "Calibration").
+//!
+//! The recording streams by once ([`Calibrator::event`]); memory does not follow its length
+//! (each axis keeps the samples of the move under way and a summary of at most 4096 moves, the
+//! spindle those of the start under way, the PLC the edges waiting for their answer; every
+//! sample of values is bounded, an even subsample beyond its size). Estimated, when the
+//! recording shows them ([`axis`], [`spindle`], [`plc`]):
+//! - the rapid rate per axis: the velocity plateau of the fastest moves of the axis, a diameter
+//!   axis as a radius;
+//! - the rapid time constant per axis: the rapid rate over the acceleration fitted on the raw
+//!   positions of those moves' accelerations and decelerations (√distance from rest is linear in
+//!   time), the median;
+//! - the cutting time constant: the maximum cutting feed over the acceleration of the moves of
+//!   one axis alone that reach a plateau below the rapid rate (cutting feeds, thread passes);
+//! - the spindle time constant: the starts from rest in speed mode, their slope from 10 % to
+//!   90 % of the speed they reach, scaled to the maximum spindle speed;
+//! - the rigid tapping time constant: the same slope in the strokes (RGSPP/RGSPM), scaled to
+//!   the rigid tapping maximum speed;
+//! - `plc.fin_ms`, `plc.fin_fall_ms`, `plc.sppos_reach_ms`, `plc.rgtap_ms`, `plc.rgtap_fall_ms`:
+//!   medians of the PLC's answers ([`plc::PAIRS`]); `nc.orient_ms`: M19 strobe → FIN;
+//!   `plc.zsp_ms`: the spindle at rest → ZSP ↑.
+//!
+//! Only parameters of the dialect's table, under the dialect's own ids (`1620` on a Fanuc, not
+//! `nc.rapid_ramp_ms`), within their ranges, are written.
+
+pub mod axis;
+pub mod plc;
+pub mod spindle;
+
+use std::fmt::Write as _;
+
+use nc_engine::params::ParamKind;
+use nc_engine::trace::{AxisSpec, Event, Signal, TraceEvent};
+use nc_engine::Machine;
+
+/// One estimated parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// Parameter id (the dialect's).
+    pub id: &'static str,
+    /// Axis, for a per-axis parameter.
+    pub axis: Option<char>,
+    /// Value in the parameter's unit.
+    pub value: f64,
+    /// Where it came from and how sure it is.
+    pub note: String,
+}
+
+/// At most `cap` values kept: beyond, every other one is dropped and only one value in two
+/// (then four, ...) is taken, an even subsample of any number of values.
+#[derive(Debug, Clone)]
+pub struct Bounded<T> {
+    /// The values kept.
+    pub values: Vec<T>,
+    cap: usize,
+    stride: u64,
+    seen: u64,
+}
+
+impl<T> Default for Bounded<T> {
+    fn default() -> Self {
+        Bounded::new(4096)
+    }
+}
+
+impl<T> Bounded<T> {
+    /// Empty, keeping at most `cap`.
+    pub fn new(cap: usize) -> Self {
+        Bounded { values: Vec::new(), cap: cap.max(2), stride: 1, seen: 0 }
+    }
+
+    /// Offers one value.
+    pub fn push(&mut self, x: T) {
+        self.seen += 1;
+        if !(self.seen - 1).is_multiple_of(self.stride) {
+            return;
+        }
+        if self.values.len() == self.cap {
+            let mut k = 0;
+            self.values.retain(|_| {
+                k += 1;
+                k % 2 == 1
+            });
+            self.stride *= 2;
+            if !(self.seen - 1).is_multiple_of(self.stride) {
+                return;
+            }
+        }
+        self.values.push(x);
+    }
+
+    /// Values offered in all.
+    pub fn seen(&self) -> u64 {
+        self.seen
+    }
+}
+
+/// Median and half the spread of the middle half (None when empty).
+fn median_spread(v: &[f64]) -> Option<(f64, f64)> {
+    if v.is_empty() {
+        return None;
+    }
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    let q = |f: f64| v[((v.len() - 1) as f64 * f).round() as usize];
+    Some((q(0.5), (q(0.75) - q(0.25)) / 2.0))
+}
+
+/// The dialect's id for a quantity: the first of `ids` its table has (the shared `nc.*` id, or
+/// the vendor's number).
+fn id_of(machine: &Machine, ids: &[&'static str]) -> Option<&'static str> {
+    ids.iter().copied().find(|id| machine.params.def(id).is_some())
+}
+
+const RAPID: &[&str] = &["nc.rapid_mm_min", "1420"];
+const RAPID_RAMP: &[&str] = &["nc.rapid_ramp_ms", "1620"];
+const FEED_MAX: &[&str] = &["nc.feed_max_mm_min", "1430"];
+const FEED_RAMP: &[&str] = &["nc.feed_ramp_ms", "1622"];
+const SPINDLE_MAX: &[&str] = &["nc.spindle_max_rpm", "3716"];
+const SPINDLE_RAMP: &[&str] = &["nc.spindle_ramp_ms"];
+const RIGID_MAX: &[&str] = &["nc.rt_max_rpm", "5241"];
+const RIGID_RAMP: &[&str] = &["nc.rt_ramp_ms", "5261"];
+
+/// The estimator: feed it the recording's events in order, then [`Calibrator::finish`].
+pub struct Calibrator<'m> {
+    machine: &'m Machine,
+    axes: Vec<axis::AxisTrack>,
+    spindle: spindle::SpindleTrack,
+    plc: plc::PlcTrack,
+    rigid: [bool; 2],
+    rigid_rose: bool,
+    turning: bool,
+    samples: u64,
+}
+
+impl<'m> Calibrator<'m> {
+    /// A calibrator for `machine` (its dialect and base parameters) and the recording's axes.
+    pub fn new(machine: &'m Machine, axes: &[AxisSpec]) -> Self {
+        Calibrator {
+            machine,
+            axes: axes
+                .iter()
+                .filter(|a| !a.rotary)
+                .map(|a| axis::AxisTrack::new(a.index, a.letter, a.diameter))
+                .collect(),
+            spindle: spindle::SpindleTrack::new(),
+            plc: plc::PlcTrack::default(),
+            rigid: [false; 2],
+            rigid_rose: false,
+            turning: false,
+            samples: 0,
+        }
+    }
+
+    /// One recorded event (time as recorded, in order).
+    pub fn event(&mut self, e: &TraceEvent) {
+        let t = e.t_us as i64;
+        match &e.event {
+            Event::Sample(s) => {
+                self.samples += 1;
+                let rigid = self.rigid[0] || self.rigid[1] || std::mem::take(&mut self.rigid_rose);
+                for a in &mut self.axes {
+                    a.sample(t, &s.axes, rigid);
+                }
+                self.spindle.sample(t, s.spindle_mrpm);
+                self.turning = s.spindle_mrpm.abs() > 500;
+            }
+            Event::Signal { signal, value } => {
+                if let Some(k) = [Signal::Rgspp, Signal::Rgspm].iter().position(|x| x == signal) {
+                    self.rigid[k] = *value;
+                    self.rigid_rose |= *value;
+                    self.spindle.stroke(t, *value, self.rigid[0] || self.rigid[1]);
+                }
+                if *signal == Signal::Zsp && *value {
+                    self.spindle.zsp_rose(t);
+                }
+                self.plc.edge(t, *signal, *value, self.turning);
+            }
+            Event::Function { letter, code } => self.plc.function(t, *letter, *code),
+            _ => {}
+        }
+    }
+
+    /// The estimates, each under the dialect's id, within its range.
+    pub fn finish(self) -> Vec<Estimate> {
+        let m = self.machine;
+        let mut out = Vec::new();
+        for a in &self.axes {
+            axis_estimates(m, a, &mut out);
+        }
+        spindle_estimates(m, &self.spindle, &mut out);
+        for (k, (id, _, _, what)) in plc::PAIRS.iter().enumerate() {
+            let d = &self.plc.delays[k];
+            if let Some((med, _)) = median_spread(&d.values) {
+                let spread = d.values.iter().map(|x| (x - med).abs()).fold(0.0, f64::max);
+                out.push(Estimate {
+                    id,
+                    axis: None,
+                    value: (med / 1000.0).round(),
+                    note: format!(
+                        "median of {} {what} in the recording, spread ± {:.1} ms",
+                        d.seen(),
+                        spread / 1000.0
+                    ),
+                });
+            }
+        }
+        if let Some((med, spread)) = median_spread(&self.plc.orient.values) {
+            out.push(Estimate {
+                id: "nc.orient_ms",
+                axis: None,
+                value: (med / 1000.0).round(),
+                note: format!(
+                    "median of {} M19 strobe ↑ → FIN ↑, middle half ± {:.1} ms: the FIN of an M19 comes when the orientation time is over or the spindle is at rest, the later; this is the orientation time, or the time to rest (the same FIN)",
+                    self.plc.orient.seen(),
+                    spread / 1000.0
+                ),
+            });
+        }
+        if let Some((med, spread)) = median_spread(&self.spindle.zsp.values) {
+            out.push(Estimate {
+                id: "plc.zsp_ms",
+                axis: None,
+                value: (med / 1000.0).round(),
+                note: format!(
+                    "median of {} spindle at rest (its deceleration's end, between samples) → ZSP ↑, middle half ± {:.1} ms",
+                    self.spindle.zsp.seen(),
+                    spread / 1000.0
+                ),
+            });
+        }
+        // Only what the dialect has, within range, whole where the parameter is.
+        out.retain_mut(|e| {
+            if let Some(d) = m.params.def(e.id) {
+                if matches!(d.kind, ParamKind::Int | ParamKind::Bit) {
+                    e.value = e.value.round();
+                }
+            }
+            let mut p = m.params.clone();
+            p.set(e.id, e.axis, e.value).is_ok()
+        });
+        let _ = self.samples;
+        out
+    }
+}
+
+/// Rapid rate, rapid and cutting time constants of one axis.
+fn axis_estimates(m: &Machine, a: &axis::AxisTrack, out: &mut Vec<Estimate>) {
+    let moves: Vec<&axis::MoveSummary> = a.moves.values.iter().filter(|s| !s.rigid).collect();
+    let Some(top) = moves.iter().map(|s| s.peak).reduce(f64::max) else { return };
+    let fast: Vec<_> = moves.iter().filter(|s| s.peak >= 0.98 * top).collect();
+    let (mut travel, mut time, mut spans) = (0.0, 0.0, 0);
+    for (d, t) in fast.iter().filter_map(|s| s.plateau) {
+        travel += d;
+        time += t;
+        spans += 1;
+    }
+    if spans == 0 || time <= 0.0 {
+        return;
+    }
+    let rate = travel / time; // nm/s
+    let radius = if a.diameter { ", as a radius" } else { "" };
+    if let Some(id) = id_of(m, RAPID) {
+        out.push(Estimate {
+            id,
+            axis: Some(a.letter),
+            value: (rate / 1e6 * 60.0 * 10.0).round() / 10.0,
+            note: format!(
+                "travel over time on the velocity plateau of the {spans} fastest {} move(s) ({:.0} ms in all){radius}; sure only if the program has a rapid long enough to reach the rapid rate",
+                a.letter,
+                time * 1000.0
+            ),
+        });
+    }
+    let ramps: Vec<f64> =
+        fast.iter().flat_map(|s| s.accel.iter().flatten().map(|acc| rate / acc * 1000.0)).collect();
+    if let (Some(id), Some((r, spread))) = (id_of(m, RAPID_RAMP), median_spread(&ramps)) {
+        out.push(Estimate {
+            id,
+            axis: Some(a.letter),
+            value: r.round(),
+            note: format!(
+                "rapid rate / acceleration, the acceleration fitted on the positions (√distance from rest is linear in time) in {} acceleration(s) and deceleration(s): median, middle half ± {spread:.1} ms",
+                ramps.len()
+            ),
+        });
+    }
+    // Cutting moves: one axis alone, a plateau (the commanded feed reached, not a short rapid's
+    // triangle), well below the rapid rate, outside rigid strokes.
+    let (Some(id), Some(fmax)) = (id_of(m, FEED_RAMP), id_of(m, FEED_MAX)) else { return };
+    let feed_max = m.params.get(fmax) * 1e6 / 60.0; // nm/s
+    let cuts: Vec<_> = moves.iter().filter(|s| s.single && s.flat && s.peak < 0.9 * top).collect();
+    let taus: Vec<f64> =
+        cuts.iter().flat_map(|s| s.accel.iter().flatten().map(|acc| feed_max / acc * 1000.0)).collect();
+    if let Some((tau, spread)) = median_spread(&taus) {
+        let peaks = cuts.iter().map(|s| s.peak).fold(0.0, f64::max) * 60.0 / 1e6;
+        out.push(Estimate {
+            id,
+            axis: None,
+            value: tau.round(),
+            note: format!(
+                "{fmax} ({} mm/min, not estimated) / the acceleration of {} cutting move(s) of {} alone (a plateau below the rapid rate, up to {peaks:.0} mm/min), fitted on the positions: median, middle half ± {spread:.1} ms; a slow feed hardly shows it",
+                m.params.get(fmax),
+                taus.len(),
+                a.letter
+            ),
+        });
+    }
+}
+
+/// The spindle's and the rigid tapping time constants.
+fn spindle_estimates(m: &Machine, s: &spindle::SpindleTrack, out: &mut Vec<Estimate>) {
+    for (ids, max_ids, starts, what) in [
+        (SPINDLE_RAMP, SPINDLE_MAX, &s.starts, "start(s) from rest in speed mode"),
+        (RIGID_RAMP, RIGID_MAX, &s.rigid, "rigid tapping stroke(s) from rest (RGSPP/RGSPM)"),
+    ] {
+        let (Some(id), Some(max_id)) = (id_of(m, ids), id_of(m, max_ids)) else { continue };
+        let max = m.params.get(max_id);
+        let slopes: Vec<f64> = starts.values.iter().map(|x| x.slope).collect();
+        let Some((slope, spread)) = median_spread(&slopes) else { continue };
+        let top = starts.values.iter().map(|x| x.top).fold(0.0, f64::max);
+        out.push(Estimate {
+            id,
+            axis: None,
+            value: (max / slope * 1000.0).round(),
+            note: format!(
+                "{} {what}: {slope:.1} rpm/s (median, middle half ± {spread:.1}) from 10 % to 90 % of the speed reached (up to {top:.0} rpm), scaled to {max_id} {max}",
+                starts.seen()
+            ),
+        });
+    }
+}
+
+/// Estimates the machine's parameters from a recording held in memory (events as recorded, any
+/// clock): [`Calibrator`] over the slice.
+pub fn estimate(machine: &Machine, axes: &[AxisSpec], recorded: &[TraceEvent]) -> Vec<Estimate> {
+    let mut c = Calibrator::new(machine, axes);
+    for e in recorded {
+        c.event(e);
+    }
+    c.finish()
+}
+
+/// The parameter file: the base parameters' overrides, then every estimate with its note.
+pub fn params_file(machine: &Machine, estimates: &[Estimate], source: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# nc-conform calibrate: the {} machine's timing, estimated from {source}",
+        machine.dialect.name()
+    );
+    let _ =
+        writeln!(s, "# (a recording of a known-good run). Check the other machines with --params this file.");
+    let _ = writeln!(s, "params:");
+    let mut done: Vec<&str> = Vec::new();
+    for (id, axis, value) in machine.params.overrides() {
+        if estimates.iter().any(|e| e.id == id) {
+            continue;
+        }
+        let key = match axis {
+            Some(a) => format!("  {id}: {{{a}: {value}}}"),
+            None => format!("  {id}: {value}"),
+        };
+        let _ = writeln!(s, "{key}   # from the base parameters, not estimated");
+    }
+    for e in estimates {
+        if e.axis.is_some() {
+            if done.contains(&e.id) {
+                continue;
+            }
+            done.push(e.id);
+            let _ = writeln!(s, "  {}:", e.id);
+            for x in estimates.iter().filter(|x| x.id == e.id) {
+                let _ = writeln!(s, "    {}: {}   # {}", x.axis.unwrap_or('?'), x.value, x.note);
+            }
+        } else {
+            let _ = writeln!(s, "  {}: {}   # {}", e.id, e.value, e.note);
+        }
+    }
+    s
+}
