@@ -9,8 +9,9 @@ use super::Bounded;
 
 /// Velocity window, µs.
 const WINDOW_US: i64 = 8_000;
-/// Below this |v| (nm/s) an axis is at rest (0.2 mm/s).
-const FLOOR: f64 = 2e5;
+/// Below this |v| (nm/s) an axis is at rest (0.5 mm/s: twice what ± 1 µm of encoder noise
+/// gives over the window).
+const FLOOR: f64 = 5e5;
 /// Raw samples kept at most of a move's beginning and of its end (a ramp of 4 s at 1 kHz).
 const KEEP: usize = 8192;
 /// Moves kept (summaries; a longer recording keeps an even subsample).
@@ -30,8 +31,12 @@ pub struct MoveSummary {
     pub accel: [Option<f64>; 2],
     /// A rigid tapping stroke (RGSPP or RGSPM high) overlapped it.
     pub rigid: bool,
-    /// No other axis moved (start and end positions of the others within 5 µm).
+    /// No other axis moved (the others' positions at its first and its last moving window within
+    /// 50 µm, or 1 % of its travel).
     pub single: bool,
+    /// Its acceleration, its deceleration followed the spindle's speed (a rigid stroke, a G33.1
+    /// reversal): neither a rapid's nor a cutting feed's.
+    pub follows: [bool; 2],
 }
 
 /// A move being followed.
@@ -46,6 +51,11 @@ struct Open {
     peak: f64,
     rigid: bool,
     others: [i64; nc_engine::trace::AXES],
+    /// Every axis at its last moving window.
+    others_end: [i64; nc_engine::trace::AXES],
+    /// |Spindle speed| (rpm) at each window of `head_v` and `tail_v`.
+    head_r: Vec<f64>,
+    tail_r: VecDeque<f64>,
 }
 
 /// One axis followed through the recording.
@@ -56,7 +66,7 @@ pub struct AxisTrack {
     pub letter: char,
     /// Reported as a diameter (positions halved).
     pub diameter: bool,
-    pending: VecDeque<(i64, f64)>,
+    pending: VecDeque<(i64, f64, i64)>,
     recent: VecDeque<(i64, f64)>,
     open: Option<Open>,
     last_axes: [i64; nc_engine::trace::AXES],
@@ -87,8 +97,8 @@ impl AxisTrack {
     }
 
     /// One recorded sample; `rigid`: a rigid tapping stroke signal is high (or rose since the
-    /// last sample).
-    pub fn sample(&mut self, t: i64, axes: &[i64; nc_engine::trace::AXES], rigid: bool) {
+    /// last sample); `mrpm`: the spindle's speed.
+    pub fn sample(&mut self, t: i64, axes: &[i64; nc_engine::trace::AXES], rigid: bool, mrpm: i64) {
         let p = axes[self.index] as f64 / if self.diameter { 2.0 } else { 1.0 };
         self.last_axes = *axes;
         if let Some(o) = &mut self.open {
@@ -103,22 +113,29 @@ impl AxisTrack {
             self.recent.pop_front();
         }
         // Every pending sample i whose window [i, this] spans 8 ms gives a velocity at its middle.
-        self.pending.push_back((t, p));
-        while let Some(&(t0, p0)) = self.pending.front() {
+        self.pending.push_back((t, p, mrpm));
+        while let Some(&(t0, p0, r0)) = self.pending.front() {
             if t - t0 < WINDOW_US {
                 break;
             }
             self.pending.pop_front();
             let v = (p - p0) / ((t - t0) as f64 / 1e6);
-            self.window((t0 + t) / 2, v, rigid);
+            let rpm = (r0 + mrpm).abs() as f64 / 2000.0;
+            self.window((t0 + t) / 2, v, rpm, rigid);
         }
         if self.pending.len() > KEEP {
             self.pending.pop_front();
         }
     }
 
-    fn window(&mut self, tm: i64, v: f64, rigid: bool) {
+    fn window(&mut self, tm: i64, v: f64, rpm: f64, rigid: bool) {
         let moving = v.abs() > FLOOR;
+        // A reversal ends a move and starts the next (the two ramps of a V, which the window
+        // may not bring below the floor when their accelerations differ).
+        if moving && self.open.as_ref().is_some_and(|o| o.tail_v.back().is_some_and(|w| w.1 * v < 0.0)) {
+            let o = self.open.take().expect("open");
+            self.finish(o);
+        }
         match (&mut self.open, moving) {
             (None, true) => {
                 let head: Vec<(i64, f64)> =
@@ -132,29 +149,43 @@ impl AxisTrack {
                     peak: v.abs(),
                     rigid,
                     others: self.last_axes,
+                    others_end: self.last_axes,
+                    head_r: vec![rpm],
+                    tail_r: VecDeque::from([rpm]),
                 });
             }
             (Some(o), true) => {
                 o.peak = o.peak.max(v.abs());
+                o.others_end = self.last_axes;
                 if o.head_v.len() < KEEP {
                     o.head_v.push((tm, v));
+                    o.head_r.push(rpm);
                 }
                 push_ring(&mut o.tail_v, (tm, v));
+                push_ring(&mut o.tail_r, rpm);
             }
             (Some(_), false) => {
                 let o = self.open.take().expect("open");
-                let s = self.summary(o);
-                self.moves.push(s);
+                self.finish(o);
             }
             (None, false) => {}
         }
     }
 
+    /// Keeps the summary of a finished move that shows something (a plateau, a ramp).
+    fn finish(&mut self, o: Open) {
+        let s = self.summary(o);
+        if s.plateau.is_some() || s.accel.iter().any(Option::is_some) {
+            self.moves.push(s);
+        }
+    }
+
     fn summary(&self, o: Open) -> MoveSummary {
         let peak = o.peak;
-        let single = (0..nc_engine::trace::AXES)
-            .filter(|&i| i != self.index)
-            .all(|i| (self.last_axes[i] - o.others[i]).abs() <= 5_000);
+        let single = (0..nc_engine::trace::AXES).filter(|&i| i != self.index).all(|i| {
+            let travel = (o.others_end[self.index] - o.others[self.index]).abs();
+            (o.others_end[i] - o.others[i]).abs() <= (travel / 100).max(50_000)
+        });
         let first = |vs: &[(i64, f64)], level: f64| vs.iter().find(|w| w.1.abs() >= level).map(|w| w.0);
         let last =
             |vs: &VecDeque<(i64, f64)>, level: f64| vs.iter().rev().find(|w| w.1.abs() >= level).map(|w| w.0);
@@ -216,6 +247,36 @@ impl AxisTrack {
                 accel[1] = fit(&mut o.tail.iter().copied(), rest);
             }
         }
-        MoveSummary { peak, plateau, flat, accel, rigid: o.rigid, single }
+        // Following the spindle: on a ramp (20 %–80 % of the peak) the axis' speed stays in
+        // proportion to the spindle's (within a quarter: the axis may trail it), as in a rigid
+        // stroke or a G33.1 reversal, where a rapid or a feed changes speed with the spindle
+        // steady, at rest, or changing otherwise.
+        let up = o.head_v.iter().position(|w| w.1.abs() >= 0.95 * peak).unwrap_or(o.head_v.len());
+        let down = o.tail_v.iter().rposition(|w| w.1.abs() >= 0.95 * peak).map_or(0, |k| k + 1);
+        // The spindle steady over the plateau (its speed at the plateau's two ends within 10 %),
+        // and the axis' speed on the ramp (50 %–95 % of the peak) in the plateau's proportion to
+        // it, within a quarter (the axis may trail the spindle a little).
+        let r_up = o.head_r.get(up).copied();
+        let r_down = down.checked_sub(1).and_then(|k| o.tail_r.get(k)).copied();
+        let steady = match (r_up, r_down) {
+            (Some(a), Some(b)) => a > 1.0 && (a - b).abs() <= 0.1 * a.max(b),
+            _ => false,
+        };
+        let follows_on = |ws: &mut dyn Iterator<Item = (&(i64, f64), &f64)>, r_plateau: Option<f64>| {
+            let Some(rp) = r_plateau.filter(|_| steady && flat) else { return false };
+            let k = peak / rp;
+            let ratios: Vec<f64> = ws
+                .filter(|(w, _)| (0.5 * peak..=0.95 * peak).contains(&w.1.abs()))
+                .map(|(w, &r)| if r > 1.0 { w.1.abs() / r } else { f64::INFINITY })
+                .collect();
+            ratios.len() >= 3 && ratios.iter().all(|r| (r - k).abs() <= 0.25 * k)
+        };
+        let follows = [
+            follows_on(&mut o.head_v[..up].iter().zip(&o.head_r[..up]), r_up),
+            follows_on(&mut o.tail_v.iter().zip(&o.tail_r).skip(down), r_down),
+        ];
+        // A plateau is one: its mean speed near the peak (not a rapid blended into a feed).
+        let plateau = plateau.filter(|&(d, t)| d / t >= 0.93 * peak);
+        MoveSummary { peak, plateau, flat, accel, rigid: o.rigid, single, follows }
     }
 }

@@ -162,7 +162,7 @@ impl<'m> Calibrator<'m> {
                 self.samples += 1;
                 let rigid = self.rigid[0] || self.rigid[1] || std::mem::take(&mut self.rigid_rose);
                 for a in &mut self.axes {
-                    a.sample(t, &s.axes, rigid);
+                    a.sample(t, &s.axes, rigid, s.spindle_mrpm);
                 }
                 self.spindle.sample(t, s.spindle_mrpm);
                 self.turning = s.spindle_mrpm.abs() > 500;
@@ -187,9 +187,11 @@ impl<'m> Calibrator<'m> {
     pub fn finish(self) -> Vec<Estimate> {
         let m = self.machine;
         let mut out = Vec::new();
+        let mut cuts = Cuts::default();
         for a in &self.axes {
-            axis_estimates(m, a, &mut out);
+            axis_estimates(m, a, &mut cuts, &mut out);
         }
+        cut_estimate(m, &cuts, &mut out);
         spindle_estimates(m, &self.spindle, &mut out);
         for (k, (id, _, _, what)) in plc::PAIRS.iter().enumerate() {
             let d = &self.plc.delays[k];
@@ -247,10 +249,11 @@ impl<'m> Calibrator<'m> {
 }
 
 /// Rapid rate, rapid and cutting time constants of one axis.
-fn axis_estimates(m: &Machine, a: &axis::AxisTrack, out: &mut Vec<Estimate>) {
+fn axis_estimates(m: &Machine, a: &axis::AxisTrack, cuts: &mut Cuts, out: &mut Vec<Estimate>) {
     let moves: Vec<&axis::MoveSummary> = a.moves.values.iter().filter(|s| !s.rigid).collect();
-    let Some(top) = moves.iter().map(|s| s.peak).reduce(f64::max) else { return };
-    let fast: Vec<_> = moves.iter().filter(|s| s.peak >= 0.98 * top).collect();
+    let rapid_like = |s: &&&axis::MoveSummary| !s.follows[0] && !s.follows[1];
+    let Some(top) = moves.iter().filter(rapid_like).map(|s| s.peak).reduce(f64::max) else { return };
+    let fast: Vec<_> = moves.iter().filter(rapid_like).filter(|s| s.peak >= 0.98 * top).collect();
     let (mut travel, mut time, mut spans) = (0.0, 0.0, 0);
     for (d, t) in fast.iter().filter_map(|s| s.plateau) {
         travel += d;
@@ -288,26 +291,51 @@ fn axis_estimates(m: &Machine, a: &axis::AxisTrack, out: &mut Vec<Estimate>) {
         });
     }
     // Cutting moves: one axis alone, a plateau (the commanded feed reached, not a short rapid's
-    // triangle), well below the rapid rate, outside rigid strokes.
+    // triangle), well below the rapid rate, outside rigid strokes; their ramps that do not
+    // follow the spindle.
+    for s in moves.iter().filter(|s| s.single && s.flat && s.peak < 0.9 * top) {
+        let mut any = false;
+        for (acc, follows) in s.accel.iter().zip(s.follows) {
+            if let (Some(acc), false) = (acc, follows) {
+                cuts.accel.push(*acc);
+                any = true;
+            }
+        }
+        if any {
+            cuts.peak = cuts.peak.max(s.peak);
+            if !cuts.axes.contains(&a.letter) {
+                cuts.axes.push(a.letter);
+            }
+        }
+    }
+}
+
+/// The ramps of the cutting moves of every axis.
+#[derive(Default)]
+struct Cuts {
+    accel: Vec<f64>,
+    peak: f64,
+    axes: Vec<char>,
+}
+
+/// The cutting time constant: the maximum cutting feed over the cutting moves' acceleration.
+fn cut_estimate(m: &Machine, cuts: &Cuts, out: &mut Vec<Estimate>) {
     let (Some(id), Some(fmax)) = (id_of(m, FEED_RAMP), id_of(m, FEED_MAX)) else { return };
     let feed_max = m.params.get(fmax) * 1e6 / 60.0; // nm/s
-    let cuts: Vec<_> = moves.iter().filter(|s| s.single && s.flat && s.peak < 0.9 * top).collect();
-    let taus: Vec<f64> =
-        cuts.iter().flat_map(|s| s.accel.iter().flatten().map(|acc| feed_max / acc * 1000.0)).collect();
-    if let Some((tau, spread)) = median_spread(&taus) {
-        let peaks = cuts.iter().map(|s| s.peak).fold(0.0, f64::max) * 60.0 / 1e6;
-        out.push(Estimate {
-            id,
-            axis: None,
-            value: tau.round(),
-            note: format!(
-                "{fmax} ({} mm/min, not estimated) / the acceleration of {} cutting move(s) of {} alone (a plateau below the rapid rate, up to {peaks:.0} mm/min), fitted on the positions: median, middle half ± {spread:.1} ms; a slow feed hardly shows it",
-                m.params.get(fmax),
-                taus.len(),
-                a.letter
-            ),
-        });
-    }
+    let taus: Vec<f64> = cuts.accel.iter().map(|acc| feed_max / acc * 1000.0).collect();
+    let Some((tau, spread)) = median_spread(&taus) else { return };
+    out.push(Estimate {
+        id,
+        axis: None,
+        value: tau.round(),
+        note: format!(
+            "{fmax} ({} mm/min, not estimated) / the acceleration fitted on the positions in {} ramp(s) of cutting moves of one axis alone ({}; a plateau below the rapid rate, up to {:.0} mm/min; not following the spindle): median, middle half ± {spread:.1} ms; a slow feed hardly shows it",
+            m.params.get(fmax),
+            taus.len(),
+            cuts.axes.iter().collect::<String>(),
+            cuts.peak * 60.0 / 1e6
+        ),
+    });
 }
 
 /// The spindle's and the rigid tapping time constants.
@@ -354,29 +382,48 @@ pub fn params_file(machine: &Machine, estimates: &[Estimate], source: &str) -> S
     let _ =
         writeln!(s, "# (a recording of a known-good run). Check the other machines with --params this file.");
     let _ = writeln!(s, "params:");
-    let mut done: Vec<&str> = Vec::new();
-    for (id, axis, value) in machine.params.overrides() {
-        if estimates.iter().any(|e| e.id == id) {
+    // One key per parameter: a per-axis one lists its estimated axes and the base values of
+    // the others under it.
+    let base: Vec<(&'static str, Option<char>, f64)> = machine.params.overrides().collect();
+    let mut ids: Vec<&'static str> = Vec::new();
+    for id in base.iter().map(|b| b.0).chain(estimates.iter().map(|e| e.id)) {
+        if !ids.contains(&id) {
+            ids.push(id);
+        }
+    }
+    // The base parameters that were not estimated first, then the estimates.
+    ids.sort_by_key(|id| estimates.iter().any(|e| e.id == *id));
+    for id in ids {
+        let per_axis = machine.params.def(id).is_some_and(|d| d.per_axis);
+        if !per_axis {
+            match estimates.iter().find(|e| e.id == id) {
+                Some(e) => writeln!(s, "  {id}: {}   # {}", e.value, e.note),
+                None => {
+                    let v = base.iter().find(|b| b.0 == id).map_or(0.0, |b| b.2);
+                    writeln!(s, "  {id}: {v}   # from the base parameters, not estimated")
+                }
+            }
+            .ok();
             continue;
         }
-        let key = match axis {
-            Some(a) => format!("  {id}: {{{a}: {value}}}"),
-            None => format!("  {id}: {value}"),
-        };
-        let _ = writeln!(s, "{key}   # from the base parameters, not estimated");
-    }
-    for e in estimates {
-        if e.axis.is_some() {
-            if done.contains(&e.id) {
-                continue;
+        let _ = writeln!(s, "  {id}:");
+        let mut axes: Vec<char> = base
+            .iter()
+            .filter(|b| b.0 == id)
+            .filter_map(|b| b.1)
+            .chain(estimates.iter().filter(|e| e.id == id).filter_map(|e| e.axis))
+            .collect();
+        axes.sort_unstable();
+        axes.dedup();
+        for a in axes {
+            match estimates.iter().find(|e| e.id == id && e.axis == Some(a)) {
+                Some(e) => writeln!(s, "    {a}: {}   # {}", e.value, e.note),
+                None => {
+                    let v = machine.params.get_axis(id, Some(a));
+                    writeln!(s, "    {a}: {v}   # from the base parameters, not estimated")
+                }
             }
-            done.push(e.id);
-            let _ = writeln!(s, "  {}:", e.id);
-            for x in estimates.iter().filter(|x| x.id == e.id) {
-                let _ = writeln!(s, "    {}: {}   # {}", x.axis.unwrap_or('?'), x.value, x.note);
-            }
-        } else {
-            let _ = writeln!(s, "  {}: {}   # {}", e.id, e.value, e.note);
+            .ok();
         }
     }
     s
