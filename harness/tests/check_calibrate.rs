@@ -281,3 +281,30 @@ fn real_linuxcnc_recordings_calibrated_are_conformant_at_tighter_tolerances() {
     assert_eq!(code, 1, "the defect is caught:\n{text}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A Fanuc mill at its defaults running the rigid-tapping holes of the long-recording figures
+/// (5 mm rapids that never reach the rapid rate, 2 × 30 strokes), recorded realistically:
+/// calibrated, it gives back the defaults (1620 from the base rate and the triangles'
+/// acceleration within 3 ms, 5261, the PLC's delays), and no rapid rate it cannot see.
+#[test]
+fn a_machine_at_its_defaults_calibrates_to_its_defaults() {
+    let m = Machine::new("fanuc-mill").unwrap();
+    let good = run(&m, &nc_conform::check::holes::program(30));
+    let est = calibrate::estimate(&m, &good.meta.axes, &record(&good, Rec::REALISTIC));
+    let file = calibrate::params_file(&m, &est, "holes");
+    for e in &est {
+        let default = m.params.def(e.id).unwrap().default;
+        let within = if e.id == "1620" { 3.0 } else { 0.5 };
+        assert!(
+            (e.value - default).abs() <= within,
+            "{} {:?}: {} (default {default})\n{file}",
+            e.id,
+            e.axis,
+            e.value
+        );
+    }
+    assert!(!est.iter().any(|e| e.id == "1420"), "no rapid reached its rate:\n{file}");
+    for id in ["1620", "5261", "plc.zsp_ms"] {
+        assert!(est.iter().any(|e| e.id == id), "{id} estimated:\n{file}");
+    }
+}

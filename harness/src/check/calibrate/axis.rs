@@ -29,7 +29,8 @@ pub struct MoveSummary {
     pub flat: bool,
     /// Acceleration from rest and deceleration to rest, nm/s², fitted on the positions.
     pub accel: [Option<f64>; 2],
-    /// A rigid tapping stroke (RGSPP or RGSPM high) overlapped it.
+    /// A rigid tapping stroke (RGSPP or RGSPM high at the middle of most of its windows: the
+    /// stroke that begins as a move ends, within the window's reach, does not count).
     pub rigid: bool,
     /// No other axis moved (the others' positions at its first and its last moving window within
     /// 50 µm, or 1 % of its travel).
@@ -49,7 +50,8 @@ struct Open {
     tail: VecDeque<(i64, f64)>,
     tail_v: VecDeque<(i64, f64)>,
     peak: f64,
-    rigid: bool,
+    /// Its moving windows, and those with a stroke signal high.
+    windows: (u32, u32),
     others: [i64; nc_engine::trace::AXES],
     /// Every axis at its last moving window.
     others_end: [i64; nc_engine::trace::AXES],
@@ -66,7 +68,7 @@ pub struct AxisTrack {
     pub letter: char,
     /// Reported as a diameter (positions halved).
     pub diameter: bool,
-    pending: VecDeque<(i64, f64, i64)>,
+    pending: VecDeque<(i64, f64, i64, bool)>,
     recent: VecDeque<(i64, f64)>,
     open: Option<Open>,
     last_axes: [i64; nc_engine::trace::AXES],
@@ -102,7 +104,6 @@ impl AxisTrack {
         let p = axes[self.index] as f64 / if self.diameter { 2.0 } else { 1.0 };
         self.last_axes = *axes;
         if let Some(o) = &mut self.open {
-            o.rigid |= rigid;
             if o.head.len() < KEEP {
                 o.head.push((t, p));
             }
@@ -113,15 +114,18 @@ impl AxisTrack {
             self.recent.pop_front();
         }
         // Every pending sample i whose window [i, this] spans 8 ms gives a velocity at its middle.
-        self.pending.push_back((t, p, mrpm));
-        while let Some(&(t0, p0, r0)) = self.pending.front() {
+        self.pending.push_back((t, p, mrpm, rigid));
+        while let Some(&(t0, p0, r0, _)) = self.pending.front() {
             if t - t0 < WINDOW_US {
                 break;
             }
+            let mid = self.pending[(self.pending.len() - 1) / 2].3;
             self.pending.pop_front();
             let v = (p - p0) / ((t - t0) as f64 / 1e6);
             let rpm = (r0 + mrpm).abs() as f64 / 2000.0;
-            self.window((t0 + t) / 2, v, rpm, rigid);
+            // A stroke at the window's middle: the one that ends as the move begins, or begins
+            // as it ends, is not in it.
+            self.window((t0 + t) / 2, v, rpm, mid);
         }
         if self.pending.len() > KEEP {
             self.pending.pop_front();
@@ -147,7 +151,7 @@ impl AxisTrack {
                     tail,
                     tail_v: VecDeque::from([(tm, v)]),
                     peak: v.abs(),
-                    rigid,
+                    windows: (1, u32::from(rigid)),
                     others: self.last_axes,
                     others_end: self.last_axes,
                     head_r: vec![rpm],
@@ -155,6 +159,8 @@ impl AxisTrack {
                 });
             }
             (Some(o), true) => {
+                o.windows.0 += 1;
+                o.windows.1 += u32::from(rigid);
                 o.peak = o.peak.max(v.abs());
                 o.others_end = self.last_axes;
                 if o.head_v.len() < KEEP {
@@ -277,6 +283,6 @@ impl AxisTrack {
         ];
         // A plateau is one: its mean speed near the peak (not a rapid blended into a feed).
         let plateau = plateau.filter(|&(d, t)| d / t >= 0.93 * peak);
-        MoveSummary { peak, plateau, flat, accel, rigid: o.rigid, single, follows }
+        MoveSummary { peak, plateau, flat, accel, rigid: 2 * o.windows.1 > o.windows.0, single, follows }
     }
 }

@@ -254,20 +254,21 @@ fn axis_estimates(m: &Machine, a: &axis::AxisTrack, cuts: &mut Cuts, out: &mut V
     let rapid_like = |s: &&&axis::MoveSummary| !s.follows[0] && !s.follows[1];
     let Some(top) = moves.iter().filter(rapid_like).map(|s| s.peak).reduce(f64::max) else { return };
     let fast: Vec<_> = moves.iter().filter(rapid_like).filter(|s| s.peak >= 0.98 * top).collect();
+    // The rate on the plateaus of those that reached one (a short rapid's triangle peaks below
+    // the rate); without any, the base rate, and the time constant from it.
     let (mut travel, mut time, mut spans) = (0.0, 0.0, 0);
-    for (d, t) in fast.iter().filter_map(|s| s.plateau) {
+    for (d, t) in fast.iter().filter(|s| s.flat).filter_map(|s| s.plateau) {
         travel += d;
         time += t;
         spans += 1;
     }
-    if spans == 0 || time <= 0.0 {
-        return;
-    }
-    let rate = travel / time; // nm/s
     let radius = if a.diameter { ", as a radius" } else { "" };
-    if let Some(id) = id_of(m, RAPID) {
+    let Some(rapid_id) = id_of(m, RAPID) else { return };
+    let base = m.params.get_axis(rapid_id, Some(a.letter));
+    let rate = if spans > 0 && time > 0.0 {
+        let rate = travel / time; // nm/s
         out.push(Estimate {
-            id,
+            id: rapid_id,
             axis: Some(a.letter),
             value: (rate / 1e6 * 60.0 * 10.0).round() / 10.0,
             note: format!(
@@ -276,7 +277,18 @@ fn axis_estimates(m: &Machine, a: &axis::AxisTrack, cuts: &mut Cuts, out: &mut V
                 time * 1000.0
             ),
         });
-    }
+        rate
+    } else {
+        base * 1e6 / 60.0
+    };
+    let of_rate = if spans > 0 {
+        "rapid rate".to_string()
+    } else {
+        format!(
+            "the base rapid rate {base} mm/min (no rapid of {} reached a plateau: not measured)",
+            a.letter
+        )
+    };
     let ramps: Vec<f64> =
         fast.iter().flat_map(|s| s.accel.iter().flatten().map(|acc| rate / acc * 1000.0)).collect();
     if let (Some(id), Some((r, spread))) = (id_of(m, RAPID_RAMP), median_spread(&ramps)) {
@@ -285,7 +297,7 @@ fn axis_estimates(m: &Machine, a: &axis::AxisTrack, cuts: &mut Cuts, out: &mut V
             axis: Some(a.letter),
             value: r.round(),
             note: format!(
-                "rapid rate / acceleration, the acceleration fitted on the positions (√distance from rest is linear in time) in {} acceleration(s) and deceleration(s): median, middle half ± {spread:.1} ms",
+                "{of_rate} / acceleration, the acceleration fitted on the positions (√distance from rest is linear in time) in {} acceleration(s) and deceleration(s) of the fastest moves: median, middle half ± {spread:.1} ms",
                 ramps.len()
             ),
         });
