@@ -72,8 +72,11 @@ pub struct AxisTrack {
     recent: VecDeque<(i64, f64)>,
     open: Option<Open>,
     last_axes: [i64; nc_engine::trace::AXES],
-    /// Finished moves.
+    /// Finished moves (an even subsample of them all).
     pub moves: Bounded<MoveSummary>,
+    /// The fastest finished moves that may be rapids (no stroke, not following the spindle),
+    /// at most [`MOVES`]: a long recording's few long rapids are not lost in the subsample.
+    pub fastest: Vec<MoveSummary>,
 }
 
 fn push_ring<T>(q: &mut VecDeque<T>, x: T) {
@@ -95,6 +98,7 @@ impl AxisTrack {
             open: None,
             last_axes: [0; nc_engine::trace::AXES],
             moves: Bounded::new(MOVES),
+            fastest: Vec::new(),
         }
     }
 
@@ -182,6 +186,13 @@ impl AxisTrack {
     fn finish(&mut self, o: Open) {
         let s = self.summary(o);
         if s.plateau.is_some() || s.accel.iter().any(Option::is_some) {
+            if !s.rigid && !s.follows[0] && !s.follows[1] {
+                self.fastest.push(s);
+                if self.fastest.len() >= 2 * MOVES {
+                    self.fastest.sort_by(|a, b| b.peak.total_cmp(&a.peak));
+                    self.fastest.truncate(MOVES);
+                }
+            }
             self.moves.push(s);
         }
     }

@@ -251,9 +251,8 @@ impl<'m> Calibrator<'m> {
 /// Rapid rate, rapid and cutting time constants of one axis.
 fn axis_estimates(m: &Machine, a: &axis::AxisTrack, cuts: &mut Cuts, out: &mut Vec<Estimate>) {
     let moves: Vec<&axis::MoveSummary> = a.moves.values.iter().filter(|s| !s.rigid).collect();
-    let rapid_like = |s: &&&axis::MoveSummary| !s.follows[0] && !s.follows[1];
-    let Some(top) = moves.iter().filter(rapid_like).map(|s| s.peak).reduce(f64::max) else { return };
-    let fast: Vec<_> = moves.iter().filter(rapid_like).filter(|s| s.peak >= 0.98 * top).collect();
+    let Some(top) = a.fastest.iter().map(|s| s.peak).reduce(f64::max) else { return };
+    let fast: Vec<_> = a.fastest.iter().filter(|s| s.peak >= 0.98 * top).collect();
     // The rate on the plateaus of those that reached one (a short rapid's triangle peaks below
     // the rate); without any, the base rate, and the time constant from it.
     let (mut travel, mut time, mut spans) = (0.0, 0.0, 0);
