@@ -439,3 +439,22 @@ pub fn params_file(machine: &Machine, estimates: &[Estimate], source: &str) -> S
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Bounded;
+
+    /// Any number of values fits in the same memory, an even subsample of them all.
+    #[test]
+    fn bounded_keeps_an_even_subsample_within_its_size() {
+        let mut b = Bounded::new(100);
+        for k in 0..1_000_000u32 {
+            b.push(k);
+        }
+        assert!(b.values.len() <= 100 && b.values.len() >= 50, "{}", b.values.len());
+        assert_eq!(b.seen(), 1_000_000);
+        let gaps: Vec<u32> = b.values.windows(2).map(|w| w[1] - w[0]).collect();
+        assert!(gaps.iter().all(|&g| g == gaps[0]), "evenly spaced: {gaps:?}");
+        assert!(*b.values.last().unwrap() as u64 + gaps[0] as u64 >= 1_000_000 - 1, "up to the end");
+    }
+}
