@@ -156,7 +156,11 @@ impl<'m> Calibrator<'m> {
 
     /// One recorded event (time as recorded, in order).
     pub fn event(&mut self, e: &TraceEvent) {
-        let t = e.t_us as i64;
+        // Beyond about 73,000 years the differences of times could overflow: nothing to read.
+        let Ok(t) = i64::try_from(e.t_us) else { return };
+        if t > i64::MAX / 4 {
+            return;
+        }
         match &e.event {
             Event::Sample(s) => {
                 self.samples += 1;
