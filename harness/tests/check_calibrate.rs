@@ -78,13 +78,18 @@ fn without(file: &str, id: &str) -> String {
     out
 }
 
+/// Rapids of every axis, cuts of X and Y alone, M19, rigid tapping.
+const FANUC_PROGRAM: &str = "G90 G17 G94\nG00 X0 Y0 Z200\nM03 S1000\nG00 X150 Y100 Z20\nG01 X30 F4000\nG01 Y20 F4000\nM05\nG04 P800\nM19\nG04 P300\nM29 S1000\nG84 X30 Y20 Z-20 R2 F1500\nX60\nG80\nG00 Z50\nM30\n";
+
+/// A Fanuc mill whose timing is its own.
+const FANUC_TRUTH: &str = "params:\n  1420: {X: 20000, Y: 18000, Z: 15000}\n  1620: {X: 120, Y: 90, Z: 150}\n  1622: 150\n  5261: 400\n  nc.spindle_ramp_ms: 1500\n  nc.orient_ms: 300\n  plc.zsp_ms: 40\n  plc.fin_ms: 30\n";
+
 /// A Fanuc mill whose rigid tapping time constant (5261), cutting time constant (1622),
 /// orientation time and zero-speed time are not the defaults, its rapids and PLC its own too,
 /// recorded realistically (4 ms samples with jitter, 1 µm noise, lost samples, 1 ms PLC scan).
 #[test]
 fn fanuc_rigid_tap_machine_calibrated_is_conformant_and_each_new_estimate_is_needed() {
-    let program = "G90 G17 G94\nG00 X0 Y0 Z200\nM03 S1000\nG00 X150 Y100 Z20\nG01 X30 F4000\nG01 Y20 F4000\nM05\nG04 P800\nM19\nG04 P300\nM29 S1000\nG84 X30 Y20 Z-20 R2 F1500\nX60\nG80\nG00 Z50\nM30\n";
-    let truth = "params:\n  1420: {X: 20000, Y: 18000, Z: 15000}\n  1620: {X: 120, Y: 90, Z: 150}\n  1622: 150\n  5261: 400\n  nc.spindle_ramp_ms: 1500\n  nc.orient_ms: 300\n  plc.zsp_ms: 40\n  plc.fin_ms: 30\n";
+    let (program, truth) = (FANUC_PROGRAM, FANUC_TRUTH);
     let good = run(&machine("fanuc-mill", truth), program);
     assert!(good.alarms().next().is_none(), "the program runs");
     let recorded = record(&good, Rec::REALISTIC);
@@ -345,4 +350,34 @@ fn a_machine_at_its_defaults_calibrates_to_its_defaults() {
     for id in ["1620", "5261", "plc.zsp_ms"] {
         assert!(est.iter().any(|e| e.id == id), "{id} estimated:\n{file}");
     }
+}
+
+/// The same Fanuc machine recorded by a PLC-scan recorder (every edge 2–8 ms late, in its order):
+/// the axis and spindle time constants are as exact; the PLC's delays are the machine's plus the
+/// recorder's lateness (ZSP: 40 ms + 2–8), which is what a check of that recorder needs: aligned
+/// on the spindle's start (samples come on time, edges do not), the recording is conformant with
+/// the file at 10 ms on events (the recorder's own spread is 6 ms), and not with the defaults.
+#[test]
+fn a_plc_scan_recording_calibrates_to_the_machine_plus_the_recorder() {
+    let good = run(&machine("fanuc-mill", FANUC_TRUTH), FANUC_PROGRAM);
+    let recorded = record(&good, Rec::PLC_SCAN);
+    let file = calibrate_and_compare(
+        "fanuc-mill",
+        &recorded,
+        &good.meta.axes,
+        &[
+            ("1622", None, 150.0, 6.0),
+            ("5261", None, 400.0, 8.0),
+            ("nc.orient_ms", None, 300.0, 6.0),
+            ("plc.zsp_ms", None, 45.0, 3.0),
+        ],
+    );
+    let mut spec = tight();
+    spec.tolerances.event_ms = 10.0;
+    spec.anchor = Some(nc_conform::check::Anchor::SpindleStart);
+    let reference = run(&machine("fanuc-mill", &file), FANUC_PROGRAM);
+    let r = nc_conform::check::check(&reference, recorded.clone(), &spec);
+    assert!(r.conformant(), "calibrated:\n{file}\n{}", show(&r, &reference));
+    let reference = run(&Machine::new("fanuc-mill").unwrap(), FANUC_PROGRAM);
+    assert!(!nc_conform::check::check(&reference, recorded, &spec).conformant(), "the defaults do not fit");
 }
