@@ -3,17 +3,19 @@
 //! is (`docs/checking.md`, "Calibration").
 //!
 //! The recording streams by once ([`Calibrator::event`]); memory does not follow its length
-//! (each axis keeps the samples of the move under way and a summary of at most 4096 moves, the
-//! spindle those of the start under way, the PLC the edges waiting for their answer; every
-//! sample of values is bounded, an even subsample beyond its size). Estimated, when the
-//! recording shows them ([`axis`], [`spindle`], [`plc`]):
-//! - the rapid rate per axis: the velocity plateau of the fastest moves of the axis, a diameter
-//!   axis as a radius;
-//! - the rapid time constant per axis: the rapid rate over the acceleration fitted on the raw
-//!   positions of those moves' accelerations and decelerations (√distance from rest is linear in
-//!   time), the median;
+//! (each axis keeps the samples of the move under way and the summaries of at most 4096 moves
+//! plus its 4096 fastest possible rapids, the spindle the samples of the start under way, the
+//! PLC the edges waiting for their answer; every collection of values is a [`Bounded`], an even
+//! subsample beyond its size). Estimated, when the recording shows them ([`axis`], [`spindle`],
+//! [`plc`]; how moves are told apart: DEC-147):
+//! - the rapid rate per axis: the velocity plateau of the fastest moves of the axis that reached
+//!   one, a diameter axis as a radius;
+//! - the rapid time constant per axis: the rapid rate (else the base one) over the acceleration
+//!   fitted on the raw positions of those moves' accelerations and decelerations (√distance from
+//!   rest is linear in time), the median;
 //! - the cutting time constant: the maximum cutting feed over the acceleration of the moves of
-//!   one axis alone that reach a plateau below the rapid rate (cutting feeds, thread passes);
+//!   one axis alone that reach a plateau below the rapid rate, their ramps not following the
+//!   spindle (cutting feeds, thread passes);
 //! - the spindle time constant: the starts from rest in speed mode, their slope from 10 % to
 //!   90 % of the speed they reach, scaled to the maximum spindle speed;
 //! - the rigid tapping time constant: the same slope in the strokes (RGSPP/RGSPM), scaled to
