@@ -75,7 +75,7 @@ pub struct AxisTrack {
     /// Finished moves (an even subsample of them all).
     pub moves: Bounded<MoveSummary>,
     /// The fastest finished moves that may be rapids (no stroke, not following the spindle),
-    /// at most [`MOVES`]: a long recording's few long rapids are not lost in the subsample.
+    /// at most 4096: a long recording's few long rapids are not lost in the subsample.
     pub fastest: Vec<MoveSummary>,
 }
 
