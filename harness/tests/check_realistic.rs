@@ -309,7 +309,8 @@ fn real_linuxcnc_recordings_align_by_themselves() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-/// Issue 14 §3: `calibrate` estimates a machine's timing from a recording of a known-good run;
+/// Issue 14 §3: `calibrate` estimates a machine's timing (rigid tapping time constant included)
+/// from a recording of a known-good run;
 /// checking the same recording with the parameters it writes is conformant at tight tolerances
 /// (it is not with the defaults), and a recording with one defect still fails.
 #[test]
@@ -318,7 +319,7 @@ fn calibrated_parameters_make_a_known_good_recording_conformant_at_tight_toleran
     // M29 after the spindle has come to rest (G04 P0.5 after M05): a drive answer measured with
     // the spindle still turning is the ramp down, not the drive (calibrate leaves it out).
     let program = "G98;\nG0 X100 Z60;\nM03 S800;\nG0 X20 Z2;\nM05;\nG04 P500;\nM29 S1000;\nG84 Z-5 F1;\nG80;\nG0 X100 Z60;\nM30;\n";
-    let truth = "params:\n  nc.rapid_mm_min: {X: 5000, Z: 7000}\n  nc.rapid_ramp_ms: {X: 80, Z: 120}\n  nc.spindle_ramp_ms: 1500\n  plc.fin_ms: 40\n  plc.fin_fall_ms: 12\n  plc.sppos_reach_ms: 90\n";
+    let truth = "params:\n  nc.rapid_mm_min: {X: 5000, Z: 7000}\n  nc.rapid_ramp_ms: {X: 80, Z: 120}\n  nc.spindle_ramp_ms: 1500\n  plc.fin_ms: 40\n  plc.fin_fall_ms: 12\n  plc.sppos_reach_ms: 90\n  nc.rt_ramp_ms: 350\n";
     let mut machine = nc_engine::Machine::new("gsk-lathe").unwrap();
     nc_conform::params_yaml::apply(truth, &mut machine).unwrap();
     let prog = machine.parse(program).unwrap();
@@ -344,6 +345,7 @@ fn calibrated_parameters_make_a_known_good_recording_conformant_at_tight_toleran
         ("nc.spindle_ramp_ms", None, 1500.0, 15.0),
         ("plc.fin_ms", None, 40.0, 1.0),
         ("plc.sppos_reach_ms", None, 90.0, 1.0),
+        ("nc.rt_ramp_ms", None, 350.0, 8.0),
     ] {
         let v = got(id, axis).unwrap_or(f64::NAN);
         eprintln!("{id} {axis:?}: {v} (truth {truth})");
@@ -366,6 +368,13 @@ fn calibrated_parameters_make_a_known_good_recording_conformant_at_tight_toleran
     let cal_ref = reference_of(&calibrated);
     let r = nc_conform::check::check(&cal_ref, recorded.clone(), &spec);
     assert!(r.conformant(), "calibrated:\n{file}\n{}", show(&r, &cal_ref));
+    // The rigid tapping time constant at its default does not fit.
+    let mut no_rt = nc_engine::Machine::new("gsk-lathe").unwrap();
+    let text: String =
+        file.lines().filter(|l| !l.contains("nc.rt_ramp_ms:")).map(|l| format!("{l}\n")).collect();
+    nc_conform::params_yaml::apply(&text, &mut no_rt).unwrap();
+    let r = nc_conform::check::check(&reference_of(&no_rt), recorded.clone(), &spec);
+    assert!(!r.conformant(), "nc.rt_ramp_ms at its default fits too");
     let default_ref = reference_of(&base);
     let r = nc_conform::check::check(&default_ref, recorded.clone(), &spec);
     assert!(!r.conformant(), "the defaults should not fit this machine");

@@ -442,10 +442,14 @@ pub fn calibrate(args: &CalibrateArgs) -> u8 {
             map: map.as_ref(),
             lenient: args.lenient,
         };
+        // One pass over the recording, as it streams (memory does not follow its length).
         let importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
         let axes = importer.meta().axes.clone();
-        let events: Vec<TraceEvent> = importer.collect::<Result<_, _>>().map_err(|e| import_error(&e))?;
-        let est = check::calibrate::estimate(&machine, &axes, &events);
+        let mut cal = check::calibrate::Calibrator::new(&machine, &axes);
+        for e in importer {
+            cal.event(&e.map_err(|e| import_error(&e))?);
+        }
+        let est = cal.finish();
         let file = check::calibrate::params_file(&machine, &est, &display_name(&args.trace));
         super::write_or_print(args.out.as_deref(), &file)
     };
