@@ -7,7 +7,7 @@
 //! plus its 4096 fastest possible rapids, the spindle the samples of the start under way, the
 //! PLC the edges waiting for their answer; every collection of values is a [`Bounded`], an even
 //! subsample beyond its size). Estimated, when the recording shows them ([`axis`], [`spindle`],
-//! [`plc`]; how moves are told apart: DEC-147):
+//! [`plc`]; how moves are told apart: DEC-148):
 //! - the rapid rate per axis: the velocity plateau of the fastest moves of the axis that reached
 //!   one, a diameter axis as a radius;
 //! - the rapid time constant per axis: the rapid rate (else the base one) over the acceleration
