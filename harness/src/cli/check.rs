@@ -227,7 +227,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         map: map.as_ref(),
         lenient: args.lenient,
     };
-    let mut importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
+    let importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
     // A JSON Lines trace names its dialect: one other than the reference's is a mistake in the
     // command line, not 25 divergences.
     if let Some(recorded) = importer.meta().trace.as_ref().map(|m| m.dialect) {
@@ -246,6 +246,8 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
     }
     let carried = check::Carried::of(importer.meta());
+    // Parsed on a thread of its own, a few batches ahead: the comparison runs on this one.
+    let mut importer = importer.read_ahead();
     let mut failure: Option<ImportError> = None;
     // The comparison keeps the recorded events other than samples: at most
     // MAX_RECORDED_EVENTS of them (docs/input-limits.md).
@@ -307,7 +309,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
             check::excerpt::fill_recorded(&mut rep, &windows, again.map_while(Result::ok));
         }
     }
-    let warnings = importer.warnings().total();
+    let warnings = importer.finish().warnings().total();
     let trace_name = display_name(&args.trace);
     let head = format!("{title}\nrecorded: {trace_name}");
     let mut text = report::summary(&rep, &reference, &head);
