@@ -38,10 +38,138 @@ pub struct JsonlWriter<W: Write> {
     written: u64,
     /// The output budget: past it the writer asks the run to stop (`output_limit`).
     budget: Option<u64>,
-    /// The text of the last value written in each numeric field of a sample (the axes by slot,
-    /// then rpm and angle): a value that did not change since the previous sample is copied, not
-    /// formatted again (most axes stand still most of the time).
-    last: Vec<(i64, Vec<u8>)>,
+    /// Each numeric field of a sample (the axes by slot, then rpm and angle): its last value
+    /// and where its text is in the previous sample line. A value that did not change since the
+    /// previous sample is copied from there, not formatted again (most axes stand still most of
+    /// the time).
+    last: [Cached; AXES + 2],
+    /// The sample lines being built (see [`JsonlWriter::write_sample`]).
+    lines: Box<Lines>,
+    /// Per reported axis: its slot and its key text in a fixed-size field (None: a key too long
+    /// for one; samples are then written by the general path).
+    keys: Option<Vec<(usize, Key)>>,
+}
+
+/// A numeric field of the previous sample line: its value (None: none yet) and its text's
+/// place there.
+#[derive(Clone, Copy, Default)]
+struct Cached {
+    v: Option<i64>,
+    at: usize,
+    len: usize,
+}
+
+/// An axis key (`,"X":`) in a fixed-size field, copied as a whole 24-byte block.
+#[derive(Clone, Copy)]
+struct Key {
+    b: [u8; 24],
+    n: usize,
+}
+
+impl Key {
+    /// A key text (None: longer than the field).
+    fn text(t: &[u8]) -> Option<Key> {
+        let mut b = [0; 24];
+        b.get_mut(..t.len())?.copy_from_slice(t);
+        Some(Key { b, n: t.len() })
+    }
+}
+
+/// The decimal digits of `x` at `b[at..]`, two at a time; returns the index after them.
+#[inline]
+fn digits_at(b: &mut [u8], at: usize, mut x: u64) -> usize {
+    let end = at + x.checked_ilog10().map_or(1, |l| l as usize + 1);
+    let mut i = end;
+    while x >= 100 {
+        let r = (x % 100) as usize * 2;
+        x /= 100;
+        i -= 2;
+        b[i..i + 2].copy_from_slice(&PAIRS[r..r + 2]);
+    }
+    if x >= 10 {
+        let r = x as usize * 2;
+        b[i - 2..i].copy_from_slice(&PAIRS[r..r + 2]);
+    } else {
+        b[i - 1] = b'0' + x as u8;
+    }
+    end
+}
+
+/// `v / 10^D` (D at most 6) at `b[at..]`, the same text as [`push_fixed`] (at most 21 bytes);
+/// returns the index after it.
+#[inline]
+fn fixed_at<const D: u32>(b: &mut [u8], at: usize, v: i64) -> usize {
+    const { assert!(D <= 6) };
+    let mut n = at;
+    if v < 0 {
+        b[n] = b'-';
+        n += 1;
+    }
+    let a = v.unsigned_abs();
+    let p = 10u64.pow(D);
+    n = digits_at(b, n, a / p);
+    let mut frac = a % p;
+    if frac != 0 {
+        let mut d = D as usize;
+        while frac.is_multiple_of(10) {
+            frac /= 10;
+            d -= 1;
+        }
+        b[n] = b'.';
+        // `d` digits, leading zeros included.
+        for k in (n + 1..n + 1 + d).rev() {
+            b[k] = b'0' + (frac % 10) as u8;
+            frac /= 10;
+        }
+        n += 1 + d;
+    }
+    n
+}
+
+/// "00" to "99".
+const PAIRS: [u8; 200] = {
+    let mut t = [0u8; 200];
+    let mut k = 0;
+    while k < 100 {
+        t[2 * k] = b'0' + (k / 10) as u8;
+        t[2 * k + 1] = b'0' + (k % 10) as u8;
+        k += 1;
+    }
+    t
+};
+
+/// Bytes of a sample line's buffer: the longest sample line (six axes) is under 400.
+const LINE: usize = 512;
+
+/// Two sample line buffers, used in turn: the previous line's numbers are copied from the one
+/// while the next line is built in the other (fixed-size copies, long after the bytes were
+/// stored: no call and no stall per piece).
+struct Lines {
+    b: [[u8; LINE]; 2],
+    cur: usize,
+}
+
+/// A numeric field of a sample line: copied from the previous line when `v` did not change,
+/// else formatted; `c` then says where it is in this line.
+#[inline]
+fn field<const D: u32>(line: &mut [u8; LINE], prev: &[u8; LINE], n: &mut usize, c: &mut Cached, v: i64) {
+    let start = *n;
+    if c.v == Some(v) {
+        line[start..start + 24].copy_from_slice(&prev[c.at..c.at + 24]);
+        *n = start + c.len;
+    } else {
+        *n = fixed_at::<D>(line, start, v);
+        c.v = Some(v);
+    }
+    c.at = start;
+    c.len = *n - start;
+}
+
+/// A constant piece of a sample line.
+#[inline]
+fn put(line: &mut [u8; LINE], n: &mut usize, t: &[u8]) {
+    line[*n..*n + t.len()].copy_from_slice(t);
+    *n += t.len();
 }
 
 impl<W: Write> JsonlWriter<W> {
@@ -55,7 +183,9 @@ impl<W: Write> JsonlWriter<W> {
             end: None,
             written: 0,
             budget: None,
-            last: vec![(i64::MIN, Vec::new()); AXES + 2],
+            last: [Cached::default(); AXES + 2],
+            lines: Box::new(Lines { b: [[0; LINE]; 2], cur: 0 }),
+            keys: None,
         }
     }
 
@@ -110,6 +240,11 @@ impl<W: Write> JsonlWriter<W> {
                 (a.index.min(AXES - 1), key.into_boxed_slice())
             })
             .collect();
+        self.keys = if self.axes.len() <= AXES {
+            self.axes.iter().map(|(slot, key)| Key::text(key).map(|k| (*slot, k))).collect()
+        } else {
+            None
+        };
         let b = &mut self.buf;
         b.extend_from_slice(b"{\"t_us\":0,\"kind\":\"meta\",\"dialect\":");
         push_json_str(b, meta.dialect);
@@ -127,8 +262,43 @@ impl<W: Write> JsonlWriter<W> {
         self.maybe_flush();
     }
 
+    /// A sample line, built in [`Lines`] (the same bytes as the general path of
+    /// [`JsonlWriter::write_event`]); false when an axis key does not fit ([`Key`]).
+    fn write_sample(&mut self, t: u64, s: &Sample) -> bool {
+        let Some(keys) = &self.keys else { return false };
+        if keys.is_empty() {
+            return false;
+        }
+        let ls = &mut *self.lines;
+        ls.cur ^= 1;
+        let [b0, b1] = &mut ls.b;
+        let (line, prev) = if ls.cur == 0 { (b0, &*b1) } else { (b1, &*b0) };
+        let mut n = 0;
+        put(line, &mut n, b"{\"t_us\":");
+        n = digits_at(line, n, t);
+        put(line, &mut n, b",\"kind\":\"sample\",\"axes\":");
+        for (slot, key) in keys {
+            line[n..n + 24].copy_from_slice(&key.b);
+            n += key.n;
+            field::<6>(line, prev, &mut n, &mut self.last[*slot], s.axes[*slot]);
+        }
+        put(line, &mut n, b"},\"spindle\":{\"rpm\":");
+        field::<3>(line, prev, &mut n, &mut self.last[AXES], s.spindle_mrpm);
+        put(line, &mut n, b",\"angle_deg\":");
+        field::<3>(line, prev, &mut n, &mut self.last[AXES + 1], s.spindle_mdeg);
+        put(line, &mut n, b"}}\n");
+        self.buf.extend_from_slice(&line[..n]);
+        true
+    }
+
     /// Writes one event line.
     pub fn write_event(&mut self, ev: &TraceEvent) {
+        if let Event::Sample(s) = &ev.event {
+            if self.write_sample(ev.t_us, s) {
+                self.maybe_flush();
+                return;
+            }
+        }
         let b = &mut self.buf;
         b.extend_from_slice(b"{\"t_us\":");
         push_u64(b, ev.t_us);
@@ -141,15 +311,15 @@ impl<W: Write> JsonlWriter<W> {
                 }
                 for (slot, key) in &self.axes {
                     b.extend_from_slice(key);
-                    push_cached(b, &mut self.last[*slot], s.axes[*slot], 6);
+                    push_fixed(b, s.axes[*slot], 6);
                 }
                 if !self.axes.is_empty() {
                     b.push(b'}');
                 }
                 b.extend_from_slice(b",\"spindle\":{\"rpm\":");
-                push_cached(b, &mut self.last[AXES], s.spindle_mrpm, 3);
+                push_fixed(b, s.spindle_mrpm, 3);
                 b.extend_from_slice(b",\"angle_deg\":");
-                push_cached(b, &mut self.last[AXES + 1], s.spindle_mdeg, 3);
+                push_fixed(b, s.spindle_mdeg, 3);
                 b.push(b'}');
             }
             Event::Signal { signal, value } => {
@@ -248,16 +418,6 @@ fn push_axes(b: &mut Vec<u8>, keys: &[(usize, Box<[u8]>)], values: &[i64; AXES])
         push_fixed(b, values[*slot], 6);
     }
     b.push(b'}');
-}
-
-/// `v` as [`push_fixed`] writes it, copied from `cache` when it holds the same value.
-fn push_cached(b: &mut Vec<u8>, cache: &mut (i64, Vec<u8>), v: i64, decimals: u32) {
-    if cache.0 != v {
-        cache.0 = v;
-        cache.1.clear();
-        push_fixed(&mut cache.1, v, decimals);
-    }
-    b.extend_from_slice(&cache.1);
 }
 
 /// `{"rpm":1000,"angle_deg":12.5}`.

@@ -536,8 +536,12 @@ impl Exec<'_> {
             axes[0] = p[0] * 2;
         }
         let (angle, rpm) = self.spindle_at(t);
-        let mdeg = (angle * 1000.0).round() as i64;
-        Sample { axes, spindle_mrpm: (rpm * 1000.0).round() as i64, spindle_mdeg: mdeg.rem_euclid(360_000) }
+        let mdeg = crate::units::round_i64(angle * 1000.0);
+        Sample {
+            axes,
+            spindle_mrpm: crate::units::round_i64(rpm * 1000.0),
+            spindle_mdeg: mdeg.rem_euclid(360_000),
+        }
     }
 
     fn finish(&mut self, reason: EndReason) {
