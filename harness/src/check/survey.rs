@@ -127,10 +127,40 @@ impl Skeleton {
 }
 
 /// One run of consecutive samples inside a stroke.
+#[derive(Clone, Copy)]
 struct Seg {
     first: Sample,
     last: (i64, Sample),
     rev_mdeg: f64,
+}
+
+/// What the closed segments say for each axis that may be the tap's: the signed travel over
+/// the revolutions of those with more than a quarter turn, the first direction of travel (in
+/// memory the same whatever the number of strokes).
+#[derive(Clone, Copy, Default)]
+struct LeadSums {
+    lead: [f64; AXES],
+    rev: f64,
+    into: [i64; AXES],
+}
+
+impl LeadSums {
+    /// Adds one segment (in stroke order: the sums are those of the segments one by one).
+    fn add(&mut self, seg: &Seg) {
+        let r = seg.rev_mdeg / 360_000.0;
+        for slot in 0..AXES {
+            let d = (seg.last.1.axes[slot] - seg.first.axes[slot]) as f64;
+            if self.into[slot] == 0 && d != 0.0 {
+                self.into[slot] = if d > 0.0 { 1 } else { -1 };
+            }
+            if r.abs() > 0.25 {
+                self.lead[slot] += d * r.signum();
+            }
+        }
+        if r.abs() > 0.25 {
+            self.rev += r.abs();
+        }
+    }
 }
 
 /// Finds the tap while the run streams by (see [`Skeleton::tap`]).
@@ -138,7 +168,10 @@ struct Seg {
 struct TapFinder {
     sig: Signals,
     first: Option<Signal>,
-    segs: Vec<Seg>,
+    /// The segment being read.
+    seg: Option<Seg>,
+    /// The segments before it.
+    sums: LeadSums,
     open: bool,
     travel: [i64; AXES],
 }
@@ -158,11 +191,13 @@ impl TapFinder {
             return;
         }
         if !self.open {
-            self.segs.push(Seg { first: *s, last: (t, *s), rev_mdeg: 0.0 });
+            if let Some(done) = self.seg.replace(Seg { first: *s, last: (t, *s), rev_mdeg: 0.0 }) {
+                self.sums.add(&done);
+            }
             self.open = true;
             return;
         }
-        let Some(seg) = self.segs.last_mut() else { return };
+        let Some(seg) = &mut self.seg else { return };
         let (tp, p) = seg.last;
         for (a, tr) in self.travel.iter_mut().enumerate() {
             *tr += (s.axes[a] - p.axes[a]).abs();
@@ -179,18 +214,11 @@ impl TapFinder {
             return None;
         }
         let diameter = axes.iter().any(|a| a.index == slot && a.diameter);
-        let (mut lead_sum, mut rev_sum, mut into_sign) = (0f64, 0f64, 0i64);
-        for seg in &self.segs {
-            let r = seg.rev_mdeg / 360_000.0;
-            let d = (seg.last.1.axes[slot] - seg.first.axes[slot]) as f64;
-            if into_sign == 0 && d != 0.0 {
-                into_sign = if d > 0.0 { 1 } else { -1 };
-            }
-            if r.abs() > 0.25 {
-                lead_sum += d * r.signum();
-                rev_sum += r.abs();
-            }
+        let mut sums = self.sums;
+        if let Some(seg) = &self.seg {
+            sums.add(seg);
         }
+        let (lead_sum, rev_sum, into_sign) = (sums.lead[slot], sums.rev, sums.into[slot]);
         if rev_sum < 0.25 {
             return None;
         }
