@@ -60,6 +60,9 @@ pub struct Reference<'a> {
     pub slimmed: bool,
     /// The envelope's sliding extremes.
     extremes: RefCell<Extremes>,
+    /// The index in `sync` of the last [`Reference::sync_index`] (where the next one looks
+    /// first).
+    sync_hint: std::cell::Cell<usize>,
 }
 
 impl std::fmt::Debug for Reference<'_> {
@@ -329,6 +332,7 @@ impl<'a> Reference<'a> {
             moves: sk.moves,
             slimmed: false,
             extremes: RefCell::new(Extremes::default()),
+            sync_hint: std::cell::Cell::new(0),
         }
     }
 
@@ -392,7 +396,15 @@ impl<'a> Reference<'a> {
 
     /// The index in [`Reference::sync`] of the synchronised move in force at `t` (None: none).
     pub fn sync_index(&self, t: i64) -> Option<usize> {
-        let k = self.sync.partition_point(|w| w.t0 <= t);
+        // The comparison walks forward: the move of the last call, or the next one, first.
+        let h = self.sync_hint.get();
+        let k = match (self.sync.get(h), self.sync.get(h + 1)) {
+            (Some(a), Some(b)) if a.t0 <= t && b.t0 > t => h + 1,
+            (Some(a), None) if a.t0 <= t => h + 1,
+            (_, Some(b)) if b.t0 <= t && self.sync.get(h + 2).is_none_or(|c| c.t0 > t) => h + 2,
+            _ => self.sync.partition_point(|w| w.t0 <= t),
+        };
+        self.sync_hint.set(k.saturating_sub(1));
         k.checked_sub(1).filter(|&i| t <= self.sync[i].t1)
     }
 
