@@ -504,32 +504,34 @@ impl<'a> Reference<'a> {
         }
         let i0 = win.first_at_or_after(t0);
         let i1 = win.first_after(t1);
+        // t0 <= t <= t1: the first sample after t is in [i0, i1] (walked from the last one).
+        let after_t = at_too.then(|| win.first_after_in(5, t));
         let n = win.t.len();
         // The last sample at or before a time from the first after it (the first sample when
-        // none), and the value there.
+        // none), and the value there: the interpolation's fraction is found once per time, not
+        // once per axis (the same arithmetic, so the same values).
         let last_le = |first_after: usize| first_after.saturating_sub(1);
-        let value = |i: usize, x: i64, k: usize| -> f64 {
+        let frac = |i: usize, x: i64| -> Option<f64> {
+            (i + 1 < n && win.t[i] <= x)
+                .then(|| (x - win.t[i]) as f64 / (win.t[i + 1] - win.t[i]).max(1) as f64)
+        };
+        let value = |i: usize, f: Option<f64>, k: usize| -> f64 {
             let v0 = win.s[i].axes[k] as f64;
-            if i + 1 < n && win.t[i] <= x {
-                let f = (x - win.t[i]) as f64 / (win.t[i + 1] - win.t[i]).max(1) as f64;
-                v0 + (win.s[i + 1].axes[k] as f64 - v0) * f
-            } else {
-                v0
+            match f {
+                Some(f) => v0 + (win.s[i + 1].axes[k] as f64 - v0) * f,
+                None => v0,
             }
         };
         let ia = last_le(if i0 < n && win.t[i0] == t0 { i0 + 1 } else { i0 });
         let ib = last_le(i1);
-        let it = if at_too {
-            let lo = i0.min(n);
-            Some(last_le(lo + win.t[lo..i1.max(lo)].partition_point(|&x| x <= t)))
-        } else {
-            None
-        };
+        let it = after_t.map(last_le);
+        let (fa, fb) = (frac(ia, t0), frac(ib, t1));
+        let ft = it.map(|i| frac(i, t));
         let (mut lo, mut hi, mut at) = ([0.0; AXES], [0.0; AXES], [0.0; AXES]);
         let mut ex = self.extremes.borrow_mut();
         ex.slide(&win, win.base + i0, win.base + i1.max(i0), slots);
         for &k in slots {
-            let (a, b) = (value(ia, t0, k), value(ib, t1, k));
+            let (a, b) = (value(ia, fa, k), value(ib, fb, k));
             let (mut l, mut h) = (a.min(b), a.max(b));
             if let Some((x, y)) = ex.get(&win, k) {
                 l = l.min(x as f64);
@@ -537,8 +539,8 @@ impl<'a> Reference<'a> {
             }
             lo[k] = l;
             hi[k] = h;
-            if let Some(i) = it {
-                at[k] = value(i, t, k);
+            if let (Some(i), Some(f)) = (it, ft) {
+                at[k] = value(i, f, k);
             }
         }
         Some((lo, hi, it.map(|_| at)))
