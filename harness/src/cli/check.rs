@@ -279,7 +279,8 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
     });
     let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
-    let mut progress = super::progress::Progress::new("check");
+    // A bar up to the reference's end (the recording's times are close to the reference's).
+    let mut progress = super::progress::Progress::new("check").with_total(skeleton.end_us.max(0) as u64);
     let mut rep = check::check_surveyed(
         source,
         skeleton,
