@@ -303,7 +303,7 @@ impl<'a> Reference<'a> {
                 _ => {}
             }
         }
-        let plan = super::sync::plan(&trace, sk.end_us);
+        let mut plan = super::sync::plan(&trace, sk.end_us);
         if !keep_all {
             // Phases, blocks and inputs are read (plan, phases, inputs): only the scenario's
             // temporal rules need them again.
@@ -312,7 +312,9 @@ impl<'a> Reference<'a> {
                 .retain(|e| !matches!(e.event, Event::Phase(_) | Event::Block { .. } | Event::Input { .. }));
             trace.events.shrink_to_fit();
         }
-        let mut sv = Survey::new(tap, plan.spans.clone(), plan.lead.clone(), &trace.meta.axes);
+        // The survey takes the plan's intervals (the windows are built from `plan.raw`).
+        let (spans, lead) = (std::mem::take(&mut plan.spans), std::mem::take(&mut plan.lead));
+        let mut sv = Survey::new(tap, spans, lead, &trace.meta.axes);
         source.replay(&mut sv);
         let (keys, spans, parts) = sv.finish();
         let sync = super::sync::build(plan, spans, parts, tap, &trace.meta.axes);

@@ -264,37 +264,45 @@ pub fn build(
 ) -> Vec<Window> {
     let mut spans = spans.into_iter();
     let mut lead_parts: Vec<Option<Vec<(i64, i64, Span)>>> = lead_parts.into_iter().map(Some).collect();
-    type Move = (i64, i64, Kind, bool, Option<&'static str>, Span);
+    // Each move with its axis (the tap's for a stroke, else the one that travels furthest) and
+    // that axis' ends, found as it is listed: the span itself is not kept (memory).
+    type Move = (i64, i64, Kind, bool, Option<&'static str>, usize, [f64; 2]);
+    let pick = |kind: Kind, span: &Span| -> Option<(usize, [f64; 2])> {
+        let slot = match kind {
+            Kind::Stroke => tap?.slot,
+            _ => span.furthest()?,
+        };
+        let end = |i: usize| span.ends[i].map_or(0.0, |e| e[slot]);
+        Some((slot, [end(0), end(1)]))
+    };
     let mut raw: Vec<Move> = Vec::new();
     for w in plan.raw {
         match w {
-            Raw::Fixed(a, b, k, l, g) => raw.push((a, b, k, l, g, spans.next().unwrap_or_default())),
+            Raw::Fixed(a, b, k, l, g) => {
+                if let Some((slot, ends)) = pick(k, &spans.next().unwrap_or_default()) {
+                    raw.push((a, b, k, l, g, slot, ends));
+                }
+            }
             Raw::Lead(i, g) => {
                 for (a, b, span) in lead_parts.get_mut(i).and_then(Option::take).unwrap_or_default() {
-                    raw.push((a, b, Kind::Thread, false, Some(g), span));
+                    if let Some((slot, ends)) = pick(Kind::Thread, &span) {
+                        raw.push((a, b, Kind::Thread, false, Some(g), slot, ends));
+                    }
                 }
             }
         }
     }
-    raw.sort_by_key(|w| w.0);
+    drop(spans);
+    // Listed in time order as a rule: sorted (stably) only when not.
+    if !raw.is_sorted_by_key(|w| w.0) {
+        raw.sort_by_key(|w| w.0);
+    }
     let mut counts = [0usize; 3];
-    let mut out = Vec::new();
-    for (t0, t1, kind, locked, code, span) in raw {
-        let slot = match kind {
-            Kind::Stroke => match tap {
-                Some(tap) => tap.slot,
-                None => continue,
-            },
-            _ => match span.furthest() {
-                Some(s) => s,
-                None => continue,
-            },
-        };
+    let mut out = Vec::with_capacity(raw.len());
+    for (t0, t1, kind, locked, code, slot, ends) in raw {
         let div = if axes.iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
         let k = kind as usize;
         counts[k] += 1;
-        let end = |i: usize| span.ends[i].map_or(0.0, |e| e[slot]);
-        let ends = [end(0), end(1)];
         out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k], code, ends });
     }
     out
