@@ -29,6 +29,11 @@ const CHUNK: usize = 64 * 1024;
 /// dropped, and [`JsonlWriter::finish`] returns it.
 pub struct JsonlWriter<W: Write> {
     out: W,
+    /// The output gathered before it is written: a fixed area (zeroed once) of which the first
+    /// `len` bytes are used; sample lines are built in it in place.
+    area: Vec<u8>,
+    len: usize,
+    /// A line of the general path, appended to the area when complete.
     buf: Vec<u8>,
     /// Per reported axis: its slot and the text before its value (`{"X":`, `,"Z":`).
     axes: Vec<(usize, Box<[u8]>)>,
@@ -43,15 +48,13 @@ pub struct JsonlWriter<W: Write> {
     /// previous sample is copied from there, not formatted again (most axes stand still most of
     /// the time).
     last: [Cached; AXES + 2],
-    /// The sample lines being built (see [`JsonlWriter::write_sample`]).
-    lines: Box<Lines>,
     /// Per reported axis: its slot and its key text in a fixed-size field (None: a key too long
     /// for one; samples are then written by the general path).
     keys: Option<Vec<(usize, Key)>>,
 }
 
-/// A numeric field of the previous sample line: its value (None: none yet) and its text's
-/// place there.
+/// A numeric field of the previous sample line: its value (None: none yet, or the line was
+/// written out) and its text's place in the output area.
 #[derive(Clone, Copy, Default)]
 struct Cached {
     v: Option<i64>,
@@ -116,12 +119,19 @@ fn fixed_at<const D: u32>(b: &mut [u8], at: usize, v: i64) -> usize {
             d -= 1;
         }
         b[n] = b'.';
-        // `d` digits, leading zeros included.
-        for k in (n + 1..n + 1 + d).rev() {
-            b[k] = b'0' + (frac % 10) as u8;
-            frac /= 10;
+        // `d` digits, leading zeros included, two at a time from the right.
+        let mut k = n + 1 + d;
+        n = k;
+        while d >= 2 {
+            let r = (frac % 100) as usize * 2;
+            frac /= 100;
+            k -= 2;
+            d -= 2;
+            b[k..k + 2].copy_from_slice(&PAIRS[r..r + 2]);
         }
-        n += 1 + d;
+        if d == 1 {
+            b[k - 1] = b'0' + frac as u8;
+        }
     }
     n
 }
@@ -138,27 +148,23 @@ const PAIRS: [u8; 200] = {
     t
 };
 
-/// Bytes of a sample line's buffer: the longest sample line (six axes) is under 400.
+/// Room for one sample line: the longest (six axes) is under 400 bytes.
 const LINE: usize = 512;
 
-/// Two sample line buffers, used in turn: the previous line's numbers are copied from the one
-/// while the next line is built in the other (fixed-size copies, long after the bytes were
-/// stored: no call and no stall per piece).
-struct Lines {
-    b: [[u8; LINE]; 2],
-    cur: usize,
-}
+/// The output area: a chunk, a long general line's worth, a sample line.
+const AREA: usize = CHUNK + 4096 + LINE;
 
-/// A numeric field of a sample line: copied from the previous line when `v` did not change,
-/// else formatted; `c` then says where it is in this line.
+/// A numeric field of a sample line at `area[*n..]`: copied from the previous line when `v` did
+/// not change (a 24-byte block, the bytes after the number ignored), else formatted; `c` then
+/// says where it is in this line.
 #[inline]
-fn field<const D: u32>(line: &mut [u8; LINE], prev: &[u8; LINE], n: &mut usize, c: &mut Cached, v: i64) {
+fn field<const D: u32>(area: &mut [u8], n: &mut usize, c: &mut Cached, v: i64) {
     let start = *n;
     if c.v == Some(v) {
-        line[start..start + 24].copy_from_slice(&prev[c.at..c.at + 24]);
+        area.copy_within(c.at..c.at + 24, start);
         *n = start + c.len;
     } else {
-        *n = fixed_at::<D>(line, start, v);
+        *n = fixed_at::<D>(area, start, v);
         c.v = Some(v);
     }
     c.at = start;
@@ -167,8 +173,8 @@ fn field<const D: u32>(line: &mut [u8; LINE], prev: &[u8; LINE], n: &mut usize, 
 
 /// A constant piece of a sample line.
 #[inline]
-fn put(line: &mut [u8; LINE], n: &mut usize, t: &[u8]) {
-    line[*n..*n + t.len()].copy_from_slice(t);
+fn put(area: &mut [u8], n: &mut usize, t: &[u8]) {
+    area[*n..*n + t.len()].copy_from_slice(t);
     *n += t.len();
 }
 
@@ -177,14 +183,15 @@ impl<W: Write> JsonlWriter<W> {
     pub fn new(out: W) -> Self {
         JsonlWriter {
             out,
-            buf: Vec::with_capacity(CHUNK + 4096),
+            area: vec![0; AREA],
+            len: 0,
+            buf: Vec::with_capacity(4096),
             axes: Vec::new(),
             error: None,
             end: None,
             written: 0,
             budget: None,
             last: [Cached::default(); AXES + 2],
-            lines: Box::new(Lines { b: [[0; LINE]; 2], cur: 0 }),
             keys: None,
         }
     }
@@ -200,7 +207,7 @@ impl<W: Write> JsonlWriter<W> {
 
     /// Bytes of trace written so far (buffered ones included).
     pub fn bytes(&self) -> u64 {
-        self.written + self.buf.len() as u64
+        self.written + self.len as u64
     }
 
     /// The reason of the `end` event, once it has been written.
@@ -246,6 +253,7 @@ impl<W: Write> JsonlWriter<W> {
             None
         };
         let b = &mut self.buf;
+        b.clear();
         b.extend_from_slice(b"{\"t_us\":0,\"kind\":\"meta\",\"dialect\":");
         push_json_str(b, meta.dialect);
         b.extend_from_slice(b",\"axes\":");
@@ -259,35 +267,36 @@ impl<W: Write> JsonlWriter<W> {
         b.extend_from_slice(b",\"format\":");
         push_json_str(b, FORMAT);
         b.extend_from_slice(b"}\n");
-        self.maybe_flush();
+        self.append_line();
     }
 
-    /// A sample line, built in [`Lines`] (the same bytes as the general path of
+    /// A sample line, built in place in the output area (the same bytes as the general path of
     /// [`JsonlWriter::write_event`]); false when an axis key does not fit ([`Key`]).
     fn write_sample(&mut self, t: u64, s: &Sample) -> bool {
+        match &self.keys {
+            Some(keys) if !keys.is_empty() => {}
+            _ => return false,
+        }
+        if self.len + LINE > self.area.len() {
+            self.flush_buf();
+        }
         let Some(keys) = &self.keys else { return false };
-        if keys.is_empty() {
-            return false;
-        }
-        let ls = &mut *self.lines;
-        ls.cur ^= 1;
-        let [b0, b1] = &mut ls.b;
-        let (line, prev) = if ls.cur == 0 { (b0, &*b1) } else { (b1, &*b0) };
-        let mut n = 0;
-        put(line, &mut n, b"{\"t_us\":");
-        n = digits_at(line, n, t);
-        put(line, &mut n, b",\"kind\":\"sample\",\"axes\":");
+        let area = &mut self.area[..];
+        let mut n = self.len;
+        put(area, &mut n, b"{\"t_us\":");
+        n = digits_at(area, n, t);
+        put(area, &mut n, b",\"kind\":\"sample\",\"axes\":");
         for (slot, key) in keys {
-            line[n..n + 24].copy_from_slice(&key.b);
+            area[n..n + 24].copy_from_slice(&key.b);
             n += key.n;
-            field::<6>(line, prev, &mut n, &mut self.last[*slot], s.axes[*slot]);
+            field::<6>(area, &mut n, &mut self.last[*slot], s.axes[*slot]);
         }
-        put(line, &mut n, b"},\"spindle\":{\"rpm\":");
-        field::<3>(line, prev, &mut n, &mut self.last[AXES], s.spindle_mrpm);
-        put(line, &mut n, b",\"angle_deg\":");
-        field::<3>(line, prev, &mut n, &mut self.last[AXES + 1], s.spindle_mdeg);
-        put(line, &mut n, b"}}\n");
-        self.buf.extend_from_slice(&line[..n]);
+        put(area, &mut n, b"},\"spindle\":{\"rpm\":");
+        field::<3>(area, &mut n, &mut self.last[AXES], s.spindle_mrpm);
+        put(area, &mut n, b",\"angle_deg\":");
+        field::<3>(area, &mut n, &mut self.last[AXES + 1], s.spindle_mdeg);
+        put(area, &mut n, b"}}\n");
+        self.len = n;
         true
     }
 
@@ -300,6 +309,7 @@ impl<W: Write> JsonlWriter<W> {
             }
         }
         let b = &mut self.buf;
+        b.clear();
         b.extend_from_slice(b"{\"t_us\":");
         push_u64(b, ev.t_us);
         b.extend_from_slice(b",\"kind\":\"");
@@ -361,23 +371,49 @@ impl<W: Write> JsonlWriter<W> {
             }
         }
         b.extend_from_slice(b"}\n");
+        self.append_line();
+    }
+
+    /// Moves the general path's line into the output area (written out directly when longer
+    /// than the area).
+    fn append_line(&mut self) {
+        let n = self.buf.len();
+        if self.len + n > self.area.len() {
+            self.flush_buf();
+        }
+        if n > self.area.len() {
+            if self.error.is_none() {
+                if let Err(e) = self.out.write_all(&self.buf) {
+                    self.error = Some(e);
+                }
+            }
+            self.written += n as u64;
+        } else {
+            self.area[self.len..self.len + n].copy_from_slice(&self.buf);
+            self.len += n;
+        }
+        self.buf.clear();
         self.maybe_flush();
     }
 
     fn maybe_flush(&mut self) {
-        if self.buf.len() >= CHUNK {
+        if self.len >= CHUNK {
             self.flush_buf();
         }
     }
 
     fn flush_buf(&mut self) {
-        if self.error.is_none() && !self.buf.is_empty() {
-            if let Err(e) = self.out.write_all(&self.buf) {
+        if self.error.is_none() && self.len > 0 {
+            if let Err(e) = self.out.write_all(&self.area[..self.len]) {
                 self.error = Some(e);
             }
         }
-        self.written += self.buf.len() as u64;
-        self.buf.clear();
+        self.written += self.len as u64;
+        self.len = 0;
+        // The previous sample line is gone: its numbers are formatted again.
+        for c in &mut self.last {
+            c.v = None;
+        }
     }
 }
 
