@@ -157,6 +157,27 @@ impl Motion {
         }
     }
 
+    /// [`Motion::pos`] and [`Motion::spindle`] at `t`, a tapping stroke's profile evaluated once
+    /// for both (the same expressions, so the same values): the engine samples both every period.
+    pub fn pos_and_spindle(&self, t: Micros) -> (Pos, Option<(f64, f64)>) {
+        match &self.path {
+            Path::Tap { profile, axis, backlash, lead, spin } => {
+                let dt = t.saturating_sub(self.t0);
+                let (s, v) = profile.eval(dt);
+                let pos = if dt >= self.duration() {
+                    self.target
+                } else {
+                    let mut p = self.start;
+                    let d = self.target[*axis] - self.start[*axis];
+                    p[*axis] = self.start[*axis] + round_i64(d.signum() as f64 * (s - backlash).max(0.0));
+                    p
+                };
+                (pos, Some((spin * s / lead * 360.0, spin * v / lead * 60e6)))
+            }
+            _ => (self.pos(t), None),
+        }
+    }
+
     /// For a tapping stroke: the spindle's turned angle (deg, signed) and speed (rpm, signed) at `t`.
     pub fn spindle(&self, t: Micros) -> Option<(f64, f64)> {
         match &self.path {
