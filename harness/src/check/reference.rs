@@ -293,18 +293,13 @@ impl<'a> Reference<'a> {
         keep_all: bool,
     ) -> Reference<'a> {
         let tap = sk.tap();
+        // Planned, and the phases and inputs listed, as the first pass read the events.
+        debug_assert!(!(keep_all && sk.is_lean()), "a lean skeleton has no phases or blocks to keep");
+        let mut plan = sk.plan();
+        let phases = std::mem::take(&mut sk.phases);
+        let inputs = std::mem::take(&mut sk.inputs);
         let mut trace = sk.trace();
-        let mut phases = Vec::new();
-        let mut inputs = Vec::new();
-        for e in &trace.events {
-            match &e.event {
-                Event::Phase(p) => phases.push((e.t_us as i64, *p)),
-                Event::Input { name, value } => inputs.push((e.t_us as i64, name.clone(), value.clone())),
-                _ => {}
-            }
-        }
-        let mut plan = super::sync::plan(&trace, sk.end_us);
-        if !keep_all {
+        if !keep_all && !sk.is_lean() {
             // Phases, blocks and inputs are read (plan, phases, inputs): only the scenario's
             // temporal rules need them again.
             trace

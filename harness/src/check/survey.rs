@@ -6,7 +6,9 @@
 //! A [`Source`] is a reference run that can be replayed as often as needed: a trace in memory,
 //! or the engine run again (it is deterministic), through the engine's public API.
 
-use nc_engine::trace::{Event, Sample, Signal, Signals, Trace, TraceEvent, TraceMeta, TraceSink, AXES};
+use nc_engine::trace::{
+    Event, Phase, Sample, Signal, Signals, Trace, TraceEvent, TraceMeta, TraceSink, AXES,
+};
 
 use super::keypoints::{KeyPoints, KeyTracker};
 use super::reference::{unwrap_delta, Tap};
@@ -55,6 +57,14 @@ pub struct Skeleton {
     pub spindle_turns: bool,
     /// Each axis is somewhere else than at the first sample at some sample.
     pub moves: [bool; AXES],
+    /// The phases by time.
+    pub phases: Vec<(i64, Phase)>,
+    /// The inputs by time (name, value).
+    pub inputs: Vec<(i64, String, String)>,
+    /// Phases, blocks and inputs are not kept in `events` (only the scenario's temporal rules
+    /// need them there; the phases and inputs are in their own lists, the blocks were planned).
+    lean: bool,
+    planner: Option<super::sync::Planner>,
     first: Option<Sample>,
     tap: TapFinder,
 }
@@ -62,6 +72,7 @@ pub struct Skeleton {
 impl TraceSink for Skeleton {
     fn start(&mut self, meta: &TraceMeta) {
         self.meta = Some(meta.clone());
+        self.planner = Some(super::sync::Planner::new(meta.dialect));
     }
     fn event(&mut self, ev: &TraceEvent) {
         self.total += 1;
@@ -78,10 +89,18 @@ impl TraceSink for Skeleton {
                 self.tap.sample(t, s);
             }
             e => {
-                if let Event::Signal { signal, value } = e {
-                    self.tap.signal(*signal, *value);
+                match e {
+                    Event::Signal { signal, value } => self.tap.signal(*signal, *value),
+                    Event::Phase(p) => self.phases.push((ev.t_us as i64, *p)),
+                    Event::Input { name, value } => {
+                        self.inputs.push((ev.t_us as i64, name.clone(), value.clone()))
+                    }
+                    _ => {}
                 }
-                self.events.push(ev.clone());
+                self.planner.get_or_insert_with(Default::default).event(ev);
+                if !(self.lean && matches!(e, Event::Phase(_) | Event::Block { .. } | Event::Input { .. })) {
+                    self.events.push(ev.clone());
+                }
             }
         }
     }
@@ -93,6 +112,24 @@ impl Skeleton {
         let mut sk = Skeleton::default();
         source.replay(&mut sk);
         sk
+    }
+
+    /// [`Skeleton::of`], without keeping the phases, blocks and inputs among [`Skeleton::events`]
+    /// when `lean` (a comparison without temporal rules: memory, about half the events).
+    pub fn of_lean(source: Source, lean: bool) -> Skeleton {
+        let mut sk = Skeleton { lean, ..Skeleton::default() };
+        source.replay(&mut sk);
+        sk
+    }
+
+    /// Whether phases, blocks and inputs were left out of [`Skeleton::events`].
+    pub fn is_lean(&self) -> bool {
+        self.lean
+    }
+
+    /// The synchronised moves planned from the discrete events read (`sync::plan`).
+    pub fn plan(&mut self) -> super::sync::Plan {
+        self.planner.take().unwrap_or_default().finish(self.end_us)
     }
 
     /// The end of the run (None: it has none).

@@ -183,7 +183,8 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         machine.run(&program, &run_opts, &mut Capped { inner: sink, discrete: 0, samples: 0 });
     };
     let source = check::Source::Run(&run);
-    let skeleton = check::survey::Skeleton::of(source);
+    // Without temporal rules the phases, blocks and inputs are not kept (memory).
+    let skeleton = check::survey::Skeleton::of_lean(source, expect.is_none());
     if skeleton.end().is_some_and(|e| e.reason == EndReason::OutputLimit) {
         let secs = skeleton.end_us as f64 / 1e6;
         let mut e = InputError::new(
