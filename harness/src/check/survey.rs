@@ -316,12 +316,12 @@ pub struct Survey {
     keys: KeyTracker,
     spans: Vec<(i64, i64)>,
     out: Vec<Span>,
-    /// Spans started and not yet past their end.
-    active: Vec<usize>,
+    /// Spans started and not yet past their end, each with its last sample within it (memory
+    /// follows the spans open at once, not all of them).
+    active: Vec<(usize, Option<Sample>)>,
     next: usize,
     /// Spans sorted by start (indices into `spans`).
     order: Vec<usize>,
-    in_span: Vec<Option<Sample>>,
     lead: Vec<LeadBlock>,
     lead_state: Vec<LeadState>,
     div: [f64; AXES],
@@ -366,7 +366,6 @@ impl Survey {
         Survey {
             keys: KeyTracker::new(tap),
             out: vec![Span::default(); spans.len()],
-            in_span: vec![None; spans.len()],
             spans,
             active: Vec::new(),
             next: 0,
@@ -381,12 +380,13 @@ impl Survey {
 
     fn sample(&mut self, t: i64, s: &Sample) {
         while self.next < self.order.len() && self.spans[self.order[self.next]].0 <= t {
-            self.active.push(self.order[self.next]);
+            self.active.push((self.order[self.next], None));
             self.next += 1;
         }
         let prev = self.prev;
-        let (spans, out, in_span) = (&self.spans, &mut self.out, &mut self.in_span);
-        self.active.retain(|&i| {
+        let (spans, out) = (&self.spans, &mut self.out);
+        self.active.retain_mut(|(i, in_span)| {
+            let i = *i;
             let (t0, t1) = spans[i];
             let o = &mut out[i];
             for (k, tk) in [t0, t1].into_iter().enumerate() {
@@ -398,12 +398,12 @@ impl Survey {
                 }
             }
             if t0 <= t && t <= t1 {
-                if let Some(p) = &in_span[i] {
+                if let Some(p) = in_span {
                     for (a, tr) in o.travel.iter_mut().enumerate() {
                         *tr += (s.axes[a] - p.axes[a]).abs();
                     }
                 }
-                in_span[i] = Some(*s);
+                *in_span = Some(*s);
             }
             t <= t1
         });
