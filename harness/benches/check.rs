@@ -1,5 +1,6 @@
 //! `check` end to end (issue 14 §4): a recording of 400 rigid holes (`check::holes`, 210,000
-//! rows at 1 ms) read from memory as JSON Lines and as CSV, compared with the program's reference
+//! rows at 1 ms) read from memory as JSON Lines and as CSV (parsed ahead on a thread of its own,
+//! as the command does), compared with the program's reference
 //! run replayed alongside (`check::check_source`): import, the reference's passes and the
 //! comparison. Throughput in recorded rows per second. The 10 M-row figures and the peak memory:
 //! `examples/check_rss.rs` (`docs/checking.md`).
@@ -34,7 +35,8 @@ fn bench(c: &mut Criterion) {
                 let opts = Options { format: None, map, lenient: false };
                 let imp = from_reader(name, Box::new(std::io::Cursor::new(data.clone())), &opts).unwrap();
                 let spec = CheckSpec { carried: Carried::of(imp.meta()), ..CheckSpec::default() };
-                let rep = check::check_source(Source::Run(&run), imp.map_while(Result::ok), &spec);
+                let rep =
+                    check::check_source(Source::Run(&run), imp.read_ahead().map_while(Result::ok), &spec);
                 assert!(rep.conformant());
                 rep.figures.recorded_samples
             })

@@ -67,7 +67,7 @@ fn main() {
                 });
             let spec = CheckSpec { carried: Carried::of(imp.meta()), ..CheckSpec::default() };
             let run = |sink: &mut dyn TraceSink| m.run(&p, &RunOptions::default(), sink);
-            let rep = check::check_source(Source::Run(&run), imp.map_while(Result::ok), &spec);
+            let rep = check::check_source(Source::Run(&run), imp.read_ahead().map_while(Result::ok), &spec);
             let secs = start.elapsed().as_secs_f64();
             let rows = rep.figures.recorded_samples;
             println!(

@@ -29,6 +29,11 @@ const CHUNK: usize = 64 * 1024;
 /// dropped, and [`JsonlWriter::finish`] returns it.
 pub struct JsonlWriter<W: Write> {
     out: W,
+    /// The output gathered before it is written: a fixed area (zeroed once) of which the first
+    /// `len` bytes are used; sample lines are built in it in place.
+    area: Vec<u8>,
+    len: usize,
+    /// A line of the general path, appended to the area when complete.
     buf: Vec<u8>,
     /// Per reported axis: its slot and the text before its value (`{"X":`, `,"Z":`).
     axes: Vec<(usize, Box<[u8]>)>,
@@ -38,10 +43,139 @@ pub struct JsonlWriter<W: Write> {
     written: u64,
     /// The output budget: past it the writer asks the run to stop (`output_limit`).
     budget: Option<u64>,
-    /// The text of the last value written in each numeric field of a sample (the axes by slot,
-    /// then rpm and angle): a value that did not change since the previous sample is copied, not
-    /// formatted again (most axes stand still most of the time).
-    last: Vec<(i64, Vec<u8>)>,
+    /// Each numeric field of a sample (the axes by slot, then rpm and angle): its last value
+    /// and where its text is in the previous sample line. A value that did not change since the
+    /// previous sample is copied from there, not formatted again (most axes stand still most of
+    /// the time).
+    last: [Cached; AXES + 2],
+    /// Per reported axis: its slot and its key text in a fixed-size field (None: a key too long
+    /// for one; samples are then written by the general path).
+    keys: Option<Vec<(usize, Key)>>,
+}
+
+/// A numeric field of the previous sample line: its value (None: none yet, or the line was
+/// written out) and its text's place in the output area.
+#[derive(Clone, Copy, Default)]
+struct Cached {
+    v: Option<i64>,
+    at: usize,
+    len: usize,
+}
+
+/// An axis key (`,"X":`) in a fixed-size field, copied as a whole 24-byte block.
+#[derive(Clone, Copy)]
+struct Key {
+    b: [u8; 24],
+    n: usize,
+}
+
+impl Key {
+    /// A key text (None: longer than the field).
+    fn text(t: &[u8]) -> Option<Key> {
+        let mut b = [0; 24];
+        b.get_mut(..t.len())?.copy_from_slice(t);
+        Some(Key { b, n: t.len() })
+    }
+}
+
+/// The decimal digits of `x` at `b[at..]`, two at a time; returns the index after them.
+#[inline]
+fn digits_at(b: &mut [u8], at: usize, mut x: u64) -> usize {
+    let end = at + x.checked_ilog10().map_or(1, |l| l as usize + 1);
+    let mut i = end;
+    while x >= 100 {
+        let r = (x % 100) as usize * 2;
+        x /= 100;
+        i -= 2;
+        b[i..i + 2].copy_from_slice(&PAIRS[r..r + 2]);
+    }
+    if x >= 10 {
+        let r = x as usize * 2;
+        b[i - 2..i].copy_from_slice(&PAIRS[r..r + 2]);
+    } else {
+        b[i - 1] = b'0' + x as u8;
+    }
+    end
+}
+
+/// `v / 10^D` (D at most 6) at `b[at..]`, the same text as [`push_fixed`] (at most 21 bytes);
+/// returns the index after it.
+#[inline]
+fn fixed_at<const D: u32>(b: &mut [u8], at: usize, v: i64) -> usize {
+    const { assert!(D <= 6) };
+    let mut n = at;
+    if v < 0 {
+        b[n] = b'-';
+        n += 1;
+    }
+    let a = v.unsigned_abs();
+    let p = 10u64.pow(D);
+    n = digits_at(b, n, a / p);
+    let mut frac = a % p;
+    if frac != 0 {
+        let mut d = D as usize;
+        while frac.is_multiple_of(10) {
+            frac /= 10;
+            d -= 1;
+        }
+        b[n] = b'.';
+        // `d` digits, leading zeros included, two at a time from the right.
+        let mut k = n + 1 + d;
+        n = k;
+        while d >= 2 {
+            let r = (frac % 100) as usize * 2;
+            frac /= 100;
+            k -= 2;
+            d -= 2;
+            b[k..k + 2].copy_from_slice(&PAIRS[r..r + 2]);
+        }
+        if d == 1 {
+            b[k - 1] = b'0' + frac as u8;
+        }
+    }
+    n
+}
+
+/// "00" to "99".
+const PAIRS: [u8; 200] = {
+    let mut t = [0u8; 200];
+    let mut k = 0;
+    while k < 100 {
+        t[2 * k] = b'0' + (k / 10) as u8;
+        t[2 * k + 1] = b'0' + (k % 10) as u8;
+        k += 1;
+    }
+    t
+};
+
+/// Room for one sample line: the longest (six axes) is under 400 bytes.
+const LINE: usize = 512;
+
+/// The output area: a chunk, a long general line's worth, a sample line.
+const AREA: usize = CHUNK + 4096 + LINE;
+
+/// A numeric field of a sample line at `area[*n..]`: copied from the previous line when `v` did
+/// not change (a 24-byte block, the bytes after the number ignored), else formatted; `c` then
+/// says where it is in this line.
+#[inline]
+fn field<const D: u32>(area: &mut [u8], n: &mut usize, c: &mut Cached, v: i64) {
+    let start = *n;
+    if c.v == Some(v) {
+        area.copy_within(c.at..c.at + 24, start);
+        *n = start + c.len;
+    } else {
+        *n = fixed_at::<D>(area, start, v);
+        c.v = Some(v);
+    }
+    c.at = start;
+    c.len = *n - start;
+}
+
+/// A constant piece of a sample line.
+#[inline]
+fn put(area: &mut [u8], n: &mut usize, t: &[u8]) {
+    area[*n..*n + t.len()].copy_from_slice(t);
+    *n += t.len();
 }
 
 impl<W: Write> JsonlWriter<W> {
@@ -49,13 +183,16 @@ impl<W: Write> JsonlWriter<W> {
     pub fn new(out: W) -> Self {
         JsonlWriter {
             out,
-            buf: Vec::with_capacity(CHUNK + 4096),
+            area: vec![0; AREA],
+            len: 0,
+            buf: Vec::with_capacity(4096),
             axes: Vec::new(),
             error: None,
             end: None,
             written: 0,
             budget: None,
-            last: vec![(i64::MIN, Vec::new()); AXES + 2],
+            last: [Cached::default(); AXES + 2],
+            keys: None,
         }
     }
 
@@ -70,7 +207,7 @@ impl<W: Write> JsonlWriter<W> {
 
     /// Bytes of trace written so far (buffered ones included).
     pub fn bytes(&self) -> u64 {
-        self.written + self.buf.len() as u64
+        self.written + self.len as u64
     }
 
     /// The reason of the `end` event, once it has been written.
@@ -110,7 +247,13 @@ impl<W: Write> JsonlWriter<W> {
                 (a.index.min(AXES - 1), key.into_boxed_slice())
             })
             .collect();
+        self.keys = if self.axes.len() <= AXES {
+            self.axes.iter().map(|(slot, key)| Key::text(key).map(|k| (*slot, k))).collect()
+        } else {
+            None
+        };
         let b = &mut self.buf;
+        b.clear();
         b.extend_from_slice(b"{\"t_us\":0,\"kind\":\"meta\",\"dialect\":");
         push_json_str(b, meta.dialect);
         b.extend_from_slice(b",\"axes\":");
@@ -124,12 +267,49 @@ impl<W: Write> JsonlWriter<W> {
         b.extend_from_slice(b",\"format\":");
         push_json_str(b, FORMAT);
         b.extend_from_slice(b"}\n");
-        self.maybe_flush();
+        self.append_line();
+    }
+
+    /// A sample line, built in place in the output area (the same bytes as the general path of
+    /// [`JsonlWriter::write_event`]); false when an axis key does not fit ([`Key`]).
+    fn write_sample(&mut self, t: u64, s: &Sample) -> bool {
+        match &self.keys {
+            Some(keys) if !keys.is_empty() => {}
+            _ => return false,
+        }
+        if self.len + LINE > self.area.len() {
+            self.flush_buf();
+        }
+        let Some(keys) = &self.keys else { return false };
+        let area = &mut self.area[..];
+        let mut n = self.len;
+        put(area, &mut n, b"{\"t_us\":");
+        n = digits_at(area, n, t);
+        put(area, &mut n, b",\"kind\":\"sample\",\"axes\":");
+        for (slot, key) in keys {
+            area[n..n + 24].copy_from_slice(&key.b);
+            n += key.n;
+            field::<6>(area, &mut n, &mut self.last[*slot], s.axes[*slot]);
+        }
+        put(area, &mut n, b"},\"spindle\":{\"rpm\":");
+        field::<3>(area, &mut n, &mut self.last[AXES], s.spindle_mrpm);
+        put(area, &mut n, b",\"angle_deg\":");
+        field::<3>(area, &mut n, &mut self.last[AXES + 1], s.spindle_mdeg);
+        put(area, &mut n, b"}}\n");
+        self.len = n;
+        true
     }
 
     /// Writes one event line.
     pub fn write_event(&mut self, ev: &TraceEvent) {
+        if let Event::Sample(s) = &ev.event {
+            if self.write_sample(ev.t_us, s) {
+                self.maybe_flush();
+                return;
+            }
+        }
         let b = &mut self.buf;
+        b.clear();
         b.extend_from_slice(b"{\"t_us\":");
         push_u64(b, ev.t_us);
         b.extend_from_slice(b",\"kind\":\"");
@@ -141,15 +321,15 @@ impl<W: Write> JsonlWriter<W> {
                 }
                 for (slot, key) in &self.axes {
                     b.extend_from_slice(key);
-                    push_cached(b, &mut self.last[*slot], s.axes[*slot], 6);
+                    push_fixed(b, s.axes[*slot], 6);
                 }
                 if !self.axes.is_empty() {
                     b.push(b'}');
                 }
                 b.extend_from_slice(b",\"spindle\":{\"rpm\":");
-                push_cached(b, &mut self.last[AXES], s.spindle_mrpm, 3);
+                push_fixed(b, s.spindle_mrpm, 3);
                 b.extend_from_slice(b",\"angle_deg\":");
-                push_cached(b, &mut self.last[AXES + 1], s.spindle_mdeg, 3);
+                push_fixed(b, s.spindle_mdeg, 3);
                 b.push(b'}');
             }
             Event::Signal { signal, value } => {
@@ -191,23 +371,49 @@ impl<W: Write> JsonlWriter<W> {
             }
         }
         b.extend_from_slice(b"}\n");
+        self.append_line();
+    }
+
+    /// Moves the general path's line into the output area (written out directly when longer
+    /// than the area).
+    fn append_line(&mut self) {
+        let n = self.buf.len();
+        if self.len + n > self.area.len() {
+            self.flush_buf();
+        }
+        if n > self.area.len() {
+            if self.error.is_none() {
+                if let Err(e) = self.out.write_all(&self.buf) {
+                    self.error = Some(e);
+                }
+            }
+            self.written += n as u64;
+        } else {
+            self.area[self.len..self.len + n].copy_from_slice(&self.buf);
+            self.len += n;
+        }
+        self.buf.clear();
         self.maybe_flush();
     }
 
     fn maybe_flush(&mut self) {
-        if self.buf.len() >= CHUNK {
+        if self.len >= CHUNK {
             self.flush_buf();
         }
     }
 
     fn flush_buf(&mut self) {
-        if self.error.is_none() && !self.buf.is_empty() {
-            if let Err(e) = self.out.write_all(&self.buf) {
+        if self.error.is_none() && self.len > 0 {
+            if let Err(e) = self.out.write_all(&self.area[..self.len]) {
                 self.error = Some(e);
             }
         }
-        self.written += self.buf.len() as u64;
-        self.buf.clear();
+        self.written += self.len as u64;
+        self.len = 0;
+        // The previous sample line is gone: its numbers are formatted again.
+        for c in &mut self.last {
+            c.v = None;
+        }
     }
 }
 
@@ -248,16 +454,6 @@ fn push_axes(b: &mut Vec<u8>, keys: &[(usize, Box<[u8]>)], values: &[i64; AXES])
         push_fixed(b, values[*slot], 6);
     }
     b.push(b'}');
-}
-
-/// `v` as [`push_fixed`] writes it, copied from `cache` when it holds the same value.
-fn push_cached(b: &mut Vec<u8>, cache: &mut (i64, Vec<u8>), v: i64, decimals: u32) {
-    if cache.0 != v {
-        cache.0 = v;
-        cache.1.clear();
-        push_fixed(&mut cache.1, v, decimals);
-    }
-    b.extend_from_slice(&cache.1);
 }
 
 /// `{"rpm":1000,"angle_deg":12.5}`.

@@ -271,3 +271,65 @@ fn write_errors_surface_in_finish() {
     }
     assert_eq!(w.finish().err().map(|e| e.kind()), Some(io::ErrorKind::BrokenPipe));
 }
+
+/// The numbers of the sample lines ([`fixed_at`], [`digits_at`]) have the text [`push_fixed`] and
+/// [`push_u64`] give, for every magnitude and sign.
+#[test]
+fn sample_numbers_match_the_general_formatting() {
+    let mut vals = vec![0, 1, -1, 9, 10, 999, 1000, -1000, 1_000_001, i64::MAX, i64::MIN, i64::MIN + 1];
+    let mut x: u64 = 0x2545_f491_4f6c_dd1d;
+    for _ in 0..20_000 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        vals.push((x as i64) >> (x % 64));
+    }
+    for v in vals {
+        let mut t = [b'#'; 32];
+        for d in [0, 3, 6] {
+            let n = match d {
+                0 => fixed_at::<0>(&mut t, 3, v),
+                3 => fixed_at::<3>(&mut t, 3, v),
+                _ => fixed_at::<6>(&mut t, 3, v),
+            };
+            let mut b = Vec::new();
+            push_fixed(&mut b, v, d);
+            assert_eq!(&t[3..n], &b[..], "{v} {d}");
+        }
+        let mut b = Vec::new();
+        push_u64(&mut b, v as u64);
+        let n = digits_at(&mut t, 1, v as u64);
+        assert_eq!(&t[1..n], &b[..], "{v}");
+    }
+}
+
+/// A sample line written by the fast path is the line of the general path, byte for byte
+/// (repeated values copied from the cache, changed ones formatted again).
+#[test]
+fn sample_lines_match_the_general_path() {
+    let meta = gsk_meta();
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut evs = Vec::new();
+    for k in 0..5000u64 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let v = |sh: u64| if x.is_multiple_of(3) { 1_234_567 } else { (x as i64) >> ((x >> sh) % 64) };
+        evs.push(TraceEvent {
+            t_us: k * 1000 + (x % 7),
+            event: Event::Sample(sample(v(1), v(2), v(3), v(4), v(5))),
+        });
+    }
+    let mut fast = JsonlWriter::new(Vec::new());
+    let mut general = JsonlWriter::new(Vec::new());
+    fast.write_meta(&meta);
+    general.write_meta(&meta);
+    general.keys = None;
+    for e in &evs {
+        fast.write_event(e);
+        general.write_event(e);
+    }
+    let (a, b) = (fast.finish().unwrap(), general.finish().unwrap());
+    assert!(a.len() > 300_000);
+    assert_eq!(String::from_utf8(a).unwrap(), String::from_utf8(b).unwrap());
+}

@@ -493,7 +493,11 @@ impl Exec<'_> {
 
     /// Machine positions (physical) at `t`.
     fn machine_pos(&self, t: Micros) -> Pos {
-        let cmd = self.command_pos(t);
+        self.machine_from(self.command_pos(t))
+    }
+
+    /// Machine positions (physical) from the command positions `cmd`.
+    fn machine_from(&self, cmd: Pos) -> Pos {
         let mut p = [0; AXES];
         for i in 0..AXES {
             p[i] = cmd[i] - self.lock_offset[i];
@@ -516,8 +520,13 @@ impl Exec<'_> {
 
     /// Spindle angle (deg, unwrapped) and speed (rpm) at `t`.
     fn spindle_at(&self, t: Micros) -> (f64, f64) {
+        self.spindle_from(t, self.motion.as_ref().and_then(|m| m.spindle(t)))
+    }
+
+    /// [`Exec::spindle_at`], the tapping stroke's spindle at `t` (`Motion::spindle`) given.
+    fn spindle_from(&self, t: Micros, tap: Option<(f64, f64)>) -> (f64, f64) {
         if let Some(m) = &self.motion {
-            if let Some((da, rpm)) = m.spindle(t) {
+            if let Some((da, rpm)) = tap {
                 if m.locked && m.lock_spindle {
                     return (self.spindle.angle0, 0.0);
                 }
@@ -536,14 +545,23 @@ impl Exec<'_> {
     }
 
     fn sample_at(&self, t: Micros) -> Sample {
-        let p = self.machine_pos(t);
+        // The motion's positions and a tapping stroke's spindle from one look at its profile.
+        let (cmd, tap) = match &self.motion {
+            Some(m) => m.pos_and_spindle(t),
+            None => (self.cmd, None),
+        };
+        let p = self.machine_from(cmd);
         let mut axes = p;
         if self.diameter_x {
             axes[0] = p[0] * 2;
         }
-        let (angle, rpm) = self.spindle_at(t);
-        let mdeg = (angle * 1000.0).round() as i64;
-        Sample { axes, spindle_mrpm: (rpm * 1000.0).round() as i64, spindle_mdeg: mdeg.rem_euclid(360_000) }
+        let (angle, rpm) = self.spindle_from(t, tap);
+        let mdeg = crate::units::round_i64(angle * 1000.0);
+        Sample {
+            axes,
+            spindle_mrpm: crate::units::round_i64(rpm * 1000.0),
+            spindle_mdeg: mdeg.rem_euclid(360_000),
+        }
     }
 
     fn finish(&mut self, reason: EndReason) {

@@ -5,7 +5,7 @@
 use super::profile::Profile;
 use crate::plan::{Plane, Pos};
 use crate::trace::AXES;
-use crate::units::{Micros, Nm};
+use crate::units::{round_i64, Micros};
 
 /// The geometry of a motion.
 #[allow(clippy::large_enum_variant)]
@@ -157,6 +157,27 @@ impl Motion {
         }
     }
 
+    /// [`Motion::pos`] and [`Motion::spindle`] at `t`, a tapping stroke's profile evaluated once
+    /// for both (the same expressions, so the same values): the engine samples both every period.
+    pub fn pos_and_spindle(&self, t: Micros) -> (Pos, Option<(f64, f64)>) {
+        match &self.path {
+            Path::Tap { profile, axis, backlash, lead, spin } => {
+                let dt = t.saturating_sub(self.t0);
+                let (s, v) = profile.eval(dt);
+                let pos = if dt >= self.duration() {
+                    self.target
+                } else {
+                    let mut p = self.start;
+                    let d = self.target[*axis] - self.start[*axis];
+                    p[*axis] = self.start[*axis] + round_i64(d.signum() as f64 * (s - backlash).max(0.0));
+                    p
+                };
+                (pos, Some((spin * s / lead * 360.0, spin * v / lead * 60e6)))
+            }
+            _ => (self.pos(t), None),
+        }
+    }
+
     /// For a tapping stroke: the spindle's turned angle (deg, signed) and speed (rpm, signed) at `t`.
     pub fn spindle(&self, t: Micros) -> Option<(f64, f64)> {
         match &self.path {
@@ -214,39 +235,43 @@ impl Motion {
                     let d = m.target[i] - m.start[i];
                     if d != 0 {
                         let s = (profiles[i].eval(dt).0 - backlash[i]).max(0.0);
-                        p[i] = m.start[i] + (d.signum() as f64 * s).round() as Nm;
+                        p[i] = m.start[i] + round_i64(d.signum() as f64 * s);
                     }
                 }
             }
             Path::Line { profile, len } => {
                 let f = if *len > 0.0 { profile.eval(dt).0 / len } else { 1.0 };
                 for i in 0..AXES {
-                    p[i] = m.start[i] + ((m.path_end[i] - m.start[i]) as f64 * f).round() as Nm;
+                    // An axis that does not travel stays where it starts (0 × f rounds to 0).
+                    let d = m.path_end[i] - m.start[i];
+                    if d != 0 {
+                        p[i] = m.start[i] + round_i64(d as f64 * f);
+                    }
                 }
             }
             Path::Arc { profile, len, center, radius, radius_end, a0, sweep, plane } => {
                 let f = profile.eval(dt).0 / len.max(1.0);
                 let (i0, i1, _) = plane.axes();
                 for i in 0..AXES {
-                    p[i] = m.start[i] + ((m.path_end[i] - m.start[i]) as f64 * f).round() as Nm;
+                    p[i] = m.start[i] + round_i64((m.path_end[i] - m.start[i]) as f64 * f);
                 }
                 let a = a0 + sweep * f;
                 let r = radius + (radius_end - radius) * f;
-                p[i0] = (center[0] + r * libm::cos(a)).round() as Nm;
-                p[i1] = (center[1] + r * libm::sin(a)).round() as Nm;
+                p[i0] = round_i64(center[0] + r * libm::cos(a));
+                p[i1] = round_i64(center[1] + r * libm::sin(a));
             }
             Path::Tap { profile, axis, backlash, .. } => {
                 let d = m.target[*axis] - m.start[*axis];
                 let s = (profile.eval(dt).0 - backlash).max(0.0);
-                p[*axis] = m.start[*axis] + (d.signum() as f64 * s).round() as Nm;
+                p[*axis] = m.start[*axis] + round_i64(d.signum() as f64 * s);
             }
             Path::Thread { profile, along, across, knots, n, blend, dir, len } => {
                 let s = profile.eval(dt).0;
                 for i in 0..AXES {
-                    p[i] = m.start[i] + ((m.path_end[i] - m.start[i]) as f64 * s / len).round() as Nm;
+                    p[i] = m.start[i] + round_i64((m.path_end[i] - m.start[i]) as f64 * s / len);
                 }
-                p[*along] = m.start[*along] + (dir * s).round() as Nm;
-                p[*across] = across_at(&knots[..*n], blend, s).round() as Nm;
+                p[*along] = m.start[*along] + round_i64(dir * s);
+                p[*across] = round_i64(across_at(&knots[..*n], blend, s));
             }
         }
         p

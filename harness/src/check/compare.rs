@@ -330,9 +330,9 @@ impl<'r, 'a> Comparator<'r, 'a> {
                 self.offset = Some(ra - tc);
                 self.anchored = true;
                 for p in std::mem::take(&mut self.pending) {
-                    self.aligned(p);
+                    self.aligned(&p);
                 }
-                self.aligned(ev);
+                self.aligned(&ev);
                 return;
             }
             let hit = matches_anchor(&self.anchor, &ev.event);
@@ -348,10 +348,10 @@ impl<'r, 'a> Comparator<'r, 'a> {
                 }
             }
             for p in std::mem::take(&mut self.pending) {
-                self.aligned(p);
+                self.aligned(&p);
             }
         }
-        self.aligned(ev);
+        self.aligned(&ev);
     }
 
     /// No anchor: the first recorded event is taken as the reference's time 0.
@@ -371,7 +371,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
         });
     }
 
-    fn aligned(&mut self, ev: TraceEvent) {
+    fn aligned(&mut self, ev: &TraceEvent) {
         let t = ev.t_us as i64 + self.offset();
         self.last_t = self.last_t.max(t);
         let w = self.tol.event_ms;
@@ -418,25 +418,25 @@ impl<'r, 'a> Comparator<'r, 'a> {
                 self.handshake.edge(t, *signal, *value, &mut faults);
                 super::handshake::report(self, faults);
                 self.keys.event(t, &ev.event);
-                self.discrete(t, &ev);
+                self.discrete(t, ev);
             }
             Event::Function { .. } => {
                 self.had_functions = true;
-                self.discrete(t, &ev)
+                self.discrete(t, ev)
             }
             Event::Alarm(_) => {
                 self.alarms += 1;
-                self.discrete(t, &ev);
+                self.discrete(t, ev);
             }
             Event::Phase(_) => {
                 self.had_phases = true;
-                self.keep(t, &ev);
+                self.keep(t, ev);
             }
             Event::Block { .. } => {
                 self.had_blocks = true;
-                self.keep(t, &ev)
+                self.keep(t, ev)
             }
-            Event::Input { .. } => self.keep(t, &ev),
+            Event::Input { .. } => self.keep(t, ev),
             Event::End(_) => {}
         }
     }
@@ -584,7 +584,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
         if self.offset.is_none() {
             self.give_up_anchor();
             for p in std::mem::take(&mut self.pending) {
-                self.aligned(p);
+                self.aligned(&p);
             }
         }
         self.flush_plot();

@@ -230,7 +230,7 @@ pub fn check_source(
     recorded: impl IntoIterator<Item = TraceEvent>,
     spec: &CheckSpec,
 ) -> Report {
-    check_surveyed(source, survey::Skeleton::of(source), recorded, spec)
+    check_surveyed(source, survey::Skeleton::of_lean(source, spec.expect.is_none()), recorded, spec)
 }
 
 /// As [`check_source`], the first pass over the reference (`skeleton`, [`survey::Skeleton::of`])

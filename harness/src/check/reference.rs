@@ -60,6 +60,9 @@ pub struct Reference<'a> {
     pub slimmed: bool,
     /// The envelope's sliding extremes.
     extremes: RefCell<Extremes>,
+    /// The index in `sync` of the last [`Reference::sync_index`] (where the next one looks
+    /// first).
+    sync_hint: std::cell::Cell<usize>,
 }
 
 impl std::fmt::Debug for Reference<'_> {
@@ -290,18 +293,13 @@ impl<'a> Reference<'a> {
         keep_all: bool,
     ) -> Reference<'a> {
         let tap = sk.tap();
+        // Planned, and the phases and inputs listed, as the first pass read the events.
+        debug_assert!(!(keep_all && sk.is_lean()), "a lean skeleton has no phases or blocks to keep");
+        let mut plan = sk.plan();
+        let phases = std::mem::take(&mut sk.phases);
+        let inputs = std::mem::take(&mut sk.inputs);
         let mut trace = sk.trace();
-        let mut phases = Vec::new();
-        let mut inputs = Vec::new();
-        for e in &trace.events {
-            match &e.event {
-                Event::Phase(p) => phases.push((e.t_us as i64, *p)),
-                Event::Input { name, value } => inputs.push((e.t_us as i64, name.clone(), value.clone())),
-                _ => {}
-            }
-        }
-        let plan = super::sync::plan(&trace, sk.end_us);
-        if !keep_all {
+        if !keep_all && !sk.is_lean() {
             // Phases, blocks and inputs are read (plan, phases, inputs): only the scenario's
             // temporal rules need them again.
             trace
@@ -309,7 +307,9 @@ impl<'a> Reference<'a> {
                 .retain(|e| !matches!(e.event, Event::Phase(_) | Event::Block { .. } | Event::Input { .. }));
             trace.events.shrink_to_fit();
         }
-        let mut sv = Survey::new(tap, plan.spans.clone(), plan.lead.clone(), &trace.meta.axes);
+        // The survey takes the plan's intervals (the windows are built from `plan.raw`).
+        let (spans, lead) = (std::mem::take(&mut plan.spans), std::mem::take(&mut plan.lead));
+        let mut sv = Survey::new(tap, spans, lead, &trace.meta.axes);
         source.replay(&mut sv);
         let (keys, spans, parts) = sv.finish();
         let sync = super::sync::build(plan, spans, parts, tap, &trace.meta.axes);
@@ -329,6 +329,7 @@ impl<'a> Reference<'a> {
             moves: sk.moves,
             slimmed: false,
             extremes: RefCell::new(Extremes::default()),
+            sync_hint: std::cell::Cell::new(0),
         }
     }
 
@@ -392,7 +393,15 @@ impl<'a> Reference<'a> {
 
     /// The index in [`Reference::sync`] of the synchronised move in force at `t` (None: none).
     pub fn sync_index(&self, t: i64) -> Option<usize> {
-        let k = self.sync.partition_point(|w| w.t0 <= t);
+        // The comparison walks forward: the move of the last call, or the next one, first.
+        let h = self.sync_hint.get();
+        let k = match (self.sync.get(h), self.sync.get(h + 1)) {
+            (Some(a), Some(b)) if a.t0 <= t && b.t0 > t => h + 1,
+            (Some(a), None) if a.t0 <= t => h + 1,
+            (_, Some(b)) if b.t0 <= t && self.sync.get(h + 2).is_none_or(|c| c.t0 > t) => h + 2,
+            _ => self.sync.partition_point(|w| w.t0 <= t),
+        };
+        self.sync_hint.set(k.saturating_sub(1));
         k.checked_sub(1).filter(|&i| t <= self.sync[i].t1)
     }
 
@@ -492,32 +501,34 @@ impl<'a> Reference<'a> {
         }
         let i0 = win.first_at_or_after(t0);
         let i1 = win.first_after(t1);
+        // t0 <= t <= t1: the first sample after t is in [i0, i1] (walked from the last one).
+        let after_t = at_too.then(|| win.first_after_in(5, t));
         let n = win.t.len();
         // The last sample at or before a time from the first after it (the first sample when
-        // none), and the value there.
+        // none), and the value there: the interpolation's fraction is found once per time, not
+        // once per axis (the same arithmetic, so the same values).
         let last_le = |first_after: usize| first_after.saturating_sub(1);
-        let value = |i: usize, x: i64, k: usize| -> f64 {
+        let frac = |i: usize, x: i64| -> Option<f64> {
+            (i + 1 < n && win.t[i] <= x)
+                .then(|| (x - win.t[i]) as f64 / (win.t[i + 1] - win.t[i]).max(1) as f64)
+        };
+        let value = |i: usize, f: Option<f64>, k: usize| -> f64 {
             let v0 = win.s[i].axes[k] as f64;
-            if i + 1 < n && win.t[i] <= x {
-                let f = (x - win.t[i]) as f64 / (win.t[i + 1] - win.t[i]).max(1) as f64;
-                v0 + (win.s[i + 1].axes[k] as f64 - v0) * f
-            } else {
-                v0
+            match f {
+                Some(f) => v0 + (win.s[i + 1].axes[k] as f64 - v0) * f,
+                None => v0,
             }
         };
         let ia = last_le(if i0 < n && win.t[i0] == t0 { i0 + 1 } else { i0 });
         let ib = last_le(i1);
-        let it = if at_too {
-            let lo = i0.min(n);
-            Some(last_le(lo + win.t[lo..i1.max(lo)].partition_point(|&x| x <= t)))
-        } else {
-            None
-        };
+        let it = after_t.map(last_le);
+        let (fa, fb) = (frac(ia, t0), frac(ib, t1));
+        let ft = it.map(|i| frac(i, t));
         let (mut lo, mut hi, mut at) = ([0.0; AXES], [0.0; AXES], [0.0; AXES]);
         let mut ex = self.extremes.borrow_mut();
         ex.slide(&win, win.base + i0, win.base + i1.max(i0), slots);
         for &k in slots {
-            let (a, b) = (value(ia, t0, k), value(ib, t1, k));
+            let (a, b) = (value(ia, fa, k), value(ib, fb, k));
             let (mut l, mut h) = (a.min(b), a.max(b));
             if let Some((x, y)) = ex.get(&win, k) {
                 l = l.min(x as f64);
@@ -525,8 +536,8 @@ impl<'a> Reference<'a> {
             }
             lo[k] = l;
             hi[k] = h;
-            if let Some(i) = it {
-                at[k] = value(i, t, k);
+            if let (Some(i), Some(f)) = (it, ft) {
+                at[k] = value(i, f, k);
             }
         }
         Some((lo, hi, it.map(|_| at)))

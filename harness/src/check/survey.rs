@@ -6,7 +6,9 @@
 //! A [`Source`] is a reference run that can be replayed as often as needed: a trace in memory,
 //! or the engine run again (it is deterministic), through the engine's public API.
 
-use nc_engine::trace::{Event, Sample, Signal, Signals, Trace, TraceEvent, TraceMeta, TraceSink, AXES};
+use nc_engine::trace::{
+    Event, Phase, Sample, Signal, Signals, Trace, TraceEvent, TraceMeta, TraceSink, AXES,
+};
 
 use super::keypoints::{KeyPoints, KeyTracker};
 use super::reference::{unwrap_delta, Tap};
@@ -55,6 +57,14 @@ pub struct Skeleton {
     pub spindle_turns: bool,
     /// Each axis is somewhere else than at the first sample at some sample.
     pub moves: [bool; AXES],
+    /// The phases by time.
+    pub phases: Vec<(i64, Phase)>,
+    /// The inputs by time (name, value).
+    pub inputs: Vec<(i64, String, String)>,
+    /// Phases, blocks and inputs are not kept in `events` (only the scenario's temporal rules
+    /// need them there; the phases and inputs are in their own lists, the blocks were planned).
+    lean: bool,
+    planner: Option<super::sync::Planner>,
     first: Option<Sample>,
     tap: TapFinder,
 }
@@ -62,6 +72,7 @@ pub struct Skeleton {
 impl TraceSink for Skeleton {
     fn start(&mut self, meta: &TraceMeta) {
         self.meta = Some(meta.clone());
+        self.planner = Some(super::sync::Planner::new(meta.dialect));
     }
     fn event(&mut self, ev: &TraceEvent) {
         self.total += 1;
@@ -78,10 +89,18 @@ impl TraceSink for Skeleton {
                 self.tap.sample(t, s);
             }
             e => {
-                if let Event::Signal { signal, value } = e {
-                    self.tap.signal(*signal, *value);
+                match e {
+                    Event::Signal { signal, value } => self.tap.signal(*signal, *value),
+                    Event::Phase(p) => self.phases.push((ev.t_us as i64, *p)),
+                    Event::Input { name, value } => {
+                        self.inputs.push((ev.t_us as i64, name.clone(), value.clone()))
+                    }
+                    _ => {}
                 }
-                self.events.push(ev.clone());
+                self.planner.get_or_insert_with(Default::default).event(ev);
+                if !(self.lean && matches!(e, Event::Phase(_) | Event::Block { .. } | Event::Input { .. })) {
+                    self.events.push(ev.clone());
+                }
             }
         }
     }
@@ -93,6 +112,24 @@ impl Skeleton {
         let mut sk = Skeleton::default();
         source.replay(&mut sk);
         sk
+    }
+
+    /// [`Skeleton::of`], without keeping the phases, blocks and inputs among [`Skeleton::events`]
+    /// when `lean` (a comparison without temporal rules: memory, about half the events).
+    pub fn of_lean(source: Source, lean: bool) -> Skeleton {
+        let mut sk = Skeleton { lean, ..Skeleton::default() };
+        source.replay(&mut sk);
+        sk
+    }
+
+    /// Whether phases, blocks and inputs were left out of [`Skeleton::events`].
+    pub fn is_lean(&self) -> bool {
+        self.lean
+    }
+
+    /// The synchronised moves planned from the discrete events read (`sync::plan`).
+    pub fn plan(&mut self) -> super::sync::Plan {
+        self.planner.take().unwrap_or_default().finish(self.end_us)
     }
 
     /// The end of the run (None: it has none).
@@ -127,10 +164,40 @@ impl Skeleton {
 }
 
 /// One run of consecutive samples inside a stroke.
+#[derive(Clone, Copy)]
 struct Seg {
     first: Sample,
     last: (i64, Sample),
     rev_mdeg: f64,
+}
+
+/// What the closed segments say for each axis that may be the tap's: the signed travel over
+/// the revolutions of those with more than a quarter turn, the first direction of travel (in
+/// memory the same whatever the number of strokes).
+#[derive(Clone, Copy, Default)]
+struct LeadSums {
+    lead: [f64; AXES],
+    rev: f64,
+    into: [i64; AXES],
+}
+
+impl LeadSums {
+    /// Adds one segment (in stroke order: the sums are those of the segments one by one).
+    fn add(&mut self, seg: &Seg) {
+        let r = seg.rev_mdeg / 360_000.0;
+        for slot in 0..AXES {
+            let d = (seg.last.1.axes[slot] - seg.first.axes[slot]) as f64;
+            if self.into[slot] == 0 && d != 0.0 {
+                self.into[slot] = if d > 0.0 { 1 } else { -1 };
+            }
+            if r.abs() > 0.25 {
+                self.lead[slot] += d * r.signum();
+            }
+        }
+        if r.abs() > 0.25 {
+            self.rev += r.abs();
+        }
+    }
 }
 
 /// Finds the tap while the run streams by (see [`Skeleton::tap`]).
@@ -138,7 +205,10 @@ struct Seg {
 struct TapFinder {
     sig: Signals,
     first: Option<Signal>,
-    segs: Vec<Seg>,
+    /// The segment being read.
+    seg: Option<Seg>,
+    /// The segments before it.
+    sums: LeadSums,
     open: bool,
     travel: [i64; AXES],
 }
@@ -158,11 +228,13 @@ impl TapFinder {
             return;
         }
         if !self.open {
-            self.segs.push(Seg { first: *s, last: (t, *s), rev_mdeg: 0.0 });
+            if let Some(done) = self.seg.replace(Seg { first: *s, last: (t, *s), rev_mdeg: 0.0 }) {
+                self.sums.add(&done);
+            }
             self.open = true;
             return;
         }
-        let Some(seg) = self.segs.last_mut() else { return };
+        let Some(seg) = &mut self.seg else { return };
         let (tp, p) = seg.last;
         for (a, tr) in self.travel.iter_mut().enumerate() {
             *tr += (s.axes[a] - p.axes[a]).abs();
@@ -179,18 +251,11 @@ impl TapFinder {
             return None;
         }
         let diameter = axes.iter().any(|a| a.index == slot && a.diameter);
-        let (mut lead_sum, mut rev_sum, mut into_sign) = (0f64, 0f64, 0i64);
-        for seg in &self.segs {
-            let r = seg.rev_mdeg / 360_000.0;
-            let d = (seg.last.1.axes[slot] - seg.first.axes[slot]) as f64;
-            if into_sign == 0 && d != 0.0 {
-                into_sign = if d > 0.0 { 1 } else { -1 };
-            }
-            if r.abs() > 0.25 {
-                lead_sum += d * r.signum();
-                rev_sum += r.abs();
-            }
+        let mut sums = self.sums;
+        if let Some(seg) = &self.seg {
+            sums.add(seg);
         }
+        let (lead_sum, rev_sum, into_sign) = (sums.lead[slot], sums.rev, sums.into[slot]);
         if rev_sum < 0.25 {
             return None;
         }
@@ -251,12 +316,12 @@ pub struct Survey {
     keys: KeyTracker,
     spans: Vec<(i64, i64)>,
     out: Vec<Span>,
-    /// Spans started and not yet past their end.
-    active: Vec<usize>,
+    /// Spans started and not yet past their end, each with its last sample within it (memory
+    /// follows the spans open at once, not all of them).
+    active: Vec<(usize, Option<Sample>)>,
     next: usize,
     /// Spans sorted by start (indices into `spans`).
     order: Vec<usize>,
-    in_span: Vec<Option<Sample>>,
     lead: Vec<LeadBlock>,
     lead_state: Vec<LeadState>,
     div: [f64; AXES],
@@ -301,7 +366,6 @@ impl Survey {
         Survey {
             keys: KeyTracker::new(tap),
             out: vec![Span::default(); spans.len()],
-            in_span: vec![None; spans.len()],
             spans,
             active: Vec::new(),
             next: 0,
@@ -316,12 +380,13 @@ impl Survey {
 
     fn sample(&mut self, t: i64, s: &Sample) {
         while self.next < self.order.len() && self.spans[self.order[self.next]].0 <= t {
-            self.active.push(self.order[self.next]);
+            self.active.push((self.order[self.next], None));
             self.next += 1;
         }
         let prev = self.prev;
-        let (spans, out, in_span) = (&self.spans, &mut self.out, &mut self.in_span);
-        self.active.retain(|&i| {
+        let (spans, out) = (&self.spans, &mut self.out);
+        self.active.retain_mut(|(i, in_span)| {
+            let i = *i;
             let (t0, t1) = spans[i];
             let o = &mut out[i];
             for (k, tk) in [t0, t1].into_iter().enumerate() {
@@ -333,12 +398,12 @@ impl Survey {
                 }
             }
             if t0 <= t && t <= t1 {
-                if let Some(p) = &in_span[i] {
+                if let Some(p) = in_span {
                     for (a, tr) in o.travel.iter_mut().enumerate() {
                         *tr += (s.axes[a] - p.axes[a]).abs();
                     }
                 }
-                in_span[i] = Some(*s);
+                *in_span = Some(*s);
             }
             t <= t1
         });

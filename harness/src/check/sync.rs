@@ -17,7 +17,7 @@
 //! after the index (G92.3, cycle 832), the start angle too (the error itself), whatever the
 //! clocks and sample times.
 
-use nc_engine::trace::{AxisSpec, Event, Phase, Signal, Signals, Trace};
+use nc_engine::trace::{AxisSpec, Event, Phase, Signal, Signals, Trace, TraceEvent};
 
 use super::reference::{unwrap_delta, Reference};
 use super::survey::{LeadBlock, Span};
@@ -144,6 +144,7 @@ fn word(text: &str, letter: char) -> Option<f64> {
 /// events (KND G32, G92: the parts of it where the axis that travels furthest advances the
 /// block's F per spindle revolution, within 3 %, at least 20 ms; the rapids in and back are left
 /// out), found by [`super::survey::Survey`].
+#[derive(Debug)]
 enum Raw {
     Fixed(i64, i64, Kind, bool, Option<&'static str>),
     Lead(usize, &'static str),
@@ -162,37 +163,81 @@ pub struct Plan {
 /// Plans the synchronised moves of a reference from its discrete events (`trace`: samples are
 /// not looked at) ending at `end_us`.
 pub fn plan(trace: &Trace, end_us: i64) -> Plan {
-    let dialect = trace.meta.dialect.to_string();
-    let lathe = dialect.contains("lathe");
-    let heidenhain = dialect == "heidenhain";
-    let (threads, follows, locked) = sync_codes(&dialect);
-    let mut raw: Vec<Raw> = Vec::new();
-    let mut lead: Vec<LeadBlock> = Vec::new();
-    let mut sig = Signals::default();
-    let mut stroke_from: Option<i64> = None;
-    let mut code: Option<String> = None;
-    let mut open: Option<(i64, Kind, bool, Option<&'static str>)> = None;
-    let mut block: Option<(i64, &'static str, f64)> = None;
-    let mut phased = false;
-    let mut feed: Option<f64> = None;
-    // The motion codes of the blocks read at one instant: a structure (a LinuxCNC loop, a
-    // subroutine call) is read at once, and its steps run after its last line was read.
-    let mut batch: (i64, Vec<String>) = (i64::MIN, Vec::new());
-    let mut by_lead = |raw: &mut Vec<Raw>, t0: i64, t1: i64, g: &'static str, f: f64| {
-        raw.push(Raw::Lead(lead.len(), g));
-        lead.push(LeadBlock { t0, t1, lead_mm: f });
-    };
+    let mut p = Planner::new(trace.meta.dialect);
     for e in &trace.events {
+        p.event(e);
+    }
+    p.finish(end_us)
+}
+
+/// [`plan`] as the events stream by (the reference's first pass plans while it reads, so that
+/// its blocks and phases need not be kept).
+pub struct Planner {
+    lathe: bool,
+    heidenhain: bool,
+    threads: &'static [&'static str],
+    follows: &'static [&'static str],
+    locked: &'static [&'static str],
+    raw: Vec<Raw>,
+    lead: Vec<LeadBlock>,
+    sig: Signals,
+    stroke_from: Option<i64>,
+    code: Option<String>,
+    open: Option<(i64, Kind, bool, Option<&'static str>)>,
+    block: Option<(i64, &'static str, f64)>,
+    phased: bool,
+    feed: Option<f64>,
+    /// The motion codes of the blocks read at one instant: a structure (a LinuxCNC loop, a
+    /// subroutine call) is read at once, and its steps run after its last line was read.
+    batch: (i64, Vec<String>),
+}
+
+impl Default for Planner {
+    fn default() -> Self {
+        Planner::new("")
+    }
+}
+
+impl Planner {
+    /// A planner for a run of `dialect`.
+    pub fn new(dialect: &str) -> Planner {
+        let (threads, follows, locked) = sync_codes(dialect);
+        Planner {
+            lathe: dialect.contains("lathe"),
+            heidenhain: dialect == "heidenhain",
+            threads,
+            follows,
+            locked,
+            raw: Vec::new(),
+            lead: Vec::new(),
+            sig: Signals::default(),
+            stroke_from: None,
+            code: None,
+            open: None,
+            block: None,
+            phased: false,
+            feed: None,
+            batch: (i64::MIN, Vec::new()),
+        }
+    }
+
+    fn by_lead(&mut self, t0: i64, t1: i64, g: &'static str, f: f64) {
+        self.raw.push(Raw::Lead(self.lead.len(), g));
+        self.lead.push(LeadBlock { t0, t1, lead_mm: f });
+    }
+
+    /// The next event of the run.
+    pub fn event(&mut self, e: &TraceEvent) {
         let t = e.t_us as i64;
         match &e.event {
             Event::Signal { signal, value } if matches!(signal, Signal::Rgspp | Signal::Rgspm) => {
-                sig.set(*signal, *value);
-                let on = sig.get(Signal::Rgspp) || sig.get(Signal::Rgspm);
-                match (on, stroke_from) {
-                    (true, None) => stroke_from = Some(t),
+                self.sig.set(*signal, *value);
+                let on = self.sig.get(Signal::Rgspp) || self.sig.get(Signal::Rgspm);
+                match (on, self.stroke_from) {
+                    (true, None) => self.stroke_from = Some(t),
                     (false, Some(a)) => {
-                        raw.push(Raw::Fixed(a, t, Kind::Stroke, false, None));
-                        stroke_from = None;
+                        self.raw.push(Raw::Fixed(a, t, Kind::Stroke, false, None));
+                        self.stroke_from = None;
                     }
                     _ => {}
                 }
@@ -200,75 +245,81 @@ pub fn plan(trace: &Trace, end_us: i64) -> Plan {
             Event::Block { text, .. } => {
                 // A thread block that ran without phase events (KND G32/G92): its synchronised
                 // parts are found by their lead.
-                if let Some((b0, g, f)) = block.take() {
-                    if !phased {
-                        by_lead(&mut raw, b0, t, g, f);
+                if let Some((b0, g, f)) = self.block.take() {
+                    if !self.phased {
+                        self.by_lead(b0, t, g, f);
                     }
                 }
-                if t != batch.0 {
-                    batch = (t, Vec::new());
+                if t != self.batch.0 {
+                    self.batch = (t, Vec::new());
                 }
-                if let Some(c) = motion_code(text, lathe) {
-                    batch.1.push(c.clone());
-                    code = Some(c);
+                if let Some(c) = motion_code(text, self.lathe) {
+                    self.batch.1.push(c.clone());
+                    self.code = Some(c);
                 }
                 if let Some(v) = word(text, 'F') {
-                    feed = Some(v);
+                    self.feed = Some(v);
                 }
-                let c = code.as_deref().unwrap_or("");
-                block = threads.iter().find(|x| **x == c).zip(feed).map(|(g, f)| (t, *g, f));
-                phased = false;
+                let c = self.code.as_deref().unwrap_or("");
+                self.block = self.threads.iter().find(|x| **x == c).zip(self.feed).map(|(g, f)| (t, *g, f));
+                self.phased = false;
             }
             Event::Phase(p) => {
-                phased = true;
-                if let Some((a, k, l, g)) = open.take() {
-                    raw.push(Raw::Fixed(a, t, k, l, g));
+                self.phased = true;
+                if let Some((a, k, l, g)) = self.open.take() {
+                    self.raw.push(Raw::Fixed(a, t, k, l, g));
                 }
-                let mut c = code.as_deref().unwrap_or("");
+                let mut c = self.code.as_deref().unwrap_or("");
                 // A phase of a synchronised move read within a structure whose last line is
                 // another: the structure's one phase-making code, when it is a synchronised one.
-                if !threads.contains(&c) && !follows.contains(&c) {
+                if !self.threads.contains(&c) && !self.follows.contains(&c) {
                     let mut phasing =
-                        batch.1.iter().filter(|x| !matches!(x.as_str(), "G0" | "G1" | "G2" | "G3"));
+                        self.batch.1.iter().filter(|x| !matches!(x.as_str(), "G0" | "G1" | "G2" | "G3"));
                     if let Some(only) = phasing.next() {
-                        let synced = threads.contains(&only.as_str()) || follows.contains(&only.as_str());
+                        let synced =
+                            self.threads.contains(&only.as_str()) || self.follows.contains(&only.as_str());
                         if synced && phasing.all(|x| x == only) {
                             c = only.as_str();
                         }
                     }
                 }
-                let g = threads.iter().chain(follows).find(|x| **x == c).copied();
-                let kind = if heidenhain && *p == Phase::Cutting {
+                let g = self.threads.iter().chain(self.follows).find(|x| **x == c).copied();
+                let kind = if self.heidenhain && *p == Phase::Cutting {
                     Some((Kind::Thread, true))
-                } else if follows.contains(&c) && matches!(p, Phase::Cutting | Phase::Retract) {
+                } else if self.follows.contains(&c) && matches!(p, Phase::Cutting | Phase::Retract) {
                     Some((Kind::Follow, false))
-                } else if threads.contains(&c) && *p == Phase::Cutting {
-                    Some((Kind::Thread, locked.contains(&c)))
+                } else if self.threads.contains(&c) && *p == Phase::Cutting {
+                    Some((Kind::Thread, self.locked.contains(&c)))
                 } else {
                     None
                 };
-                open = kind.map(|(k, l)| (t, k, l, g));
+                self.open = kind.map(|(k, l)| (t, k, l, g));
             }
             _ => {}
         }
     }
-    if let Some((a, k, l, g)) = open {
-        raw.push(Raw::Fixed(a, end_us, k, l, g));
+
+    /// The plan of the run, which ended at `end_us`.
+    pub fn finish(mut self, end_us: i64) -> Plan {
+        if let Some((a, k, l, g)) = self.open {
+            self.raw.push(Raw::Fixed(a, end_us, k, l, g));
+        }
+        if let Some((b0, g, f)) = self.block.filter(|_| !self.phased) {
+            self.by_lead(b0, end_us, g, f);
+        }
+        if let Some(a) = self.stroke_from {
+            self.raw.push(Raw::Fixed(a, end_us, Kind::Stroke, false, None));
+        }
+        let spans = self
+            .raw
+            .iter()
+            .filter_map(|w| match w {
+                Raw::Fixed(a, b, ..) => Some((*a, *b)),
+                Raw::Lead(..) => None,
+            })
+            .collect();
+        Plan { raw: self.raw, spans, lead: self.lead }
     }
-    if let Some((b0, g, f)) = block.filter(|_| !phased) {
-        by_lead(&mut raw, b0, end_us, g, f);
-    }
-    if let Some(a) = stroke_from {
-        raw.push(Raw::Fixed(a, end_us, Kind::Stroke, false, None));
-    }
-    let spans = raw
-        .iter()
-        .filter_map(|w| match w {
-            Raw::Fixed(a, b, ..) => Some((*a, *b)),
-            Raw::Lead(..) => None,
-        })
-        .collect();
-    Plan { raw, spans, lead }
 }
 
 /// The synchronised moves of a reference, in time order, from its plan and what the survey of
@@ -283,37 +334,45 @@ pub fn build(
 ) -> Vec<Window> {
     let mut spans = spans.into_iter();
     let mut lead_parts: Vec<Option<Vec<(i64, i64, Span)>>> = lead_parts.into_iter().map(Some).collect();
-    type Move = (i64, i64, Kind, bool, Option<&'static str>, Span);
+    // Each move with its axis (the tap's for a stroke, else the one that travels furthest) and
+    // that axis' ends, found as it is listed: the span itself is not kept (memory).
+    type Move = (i64, i64, Kind, bool, Option<&'static str>, usize, [f64; 2]);
+    let pick = |kind: Kind, span: &Span| -> Option<(usize, [f64; 2])> {
+        let slot = match kind {
+            Kind::Stroke => tap?.slot,
+            _ => span.furthest()?,
+        };
+        let end = |i: usize| span.ends[i].map_or(0.0, |e| e[slot]);
+        Some((slot, [end(0), end(1)]))
+    };
     let mut raw: Vec<Move> = Vec::new();
     for w in plan.raw {
         match w {
-            Raw::Fixed(a, b, k, l, g) => raw.push((a, b, k, l, g, spans.next().unwrap_or_default())),
+            Raw::Fixed(a, b, k, l, g) => {
+                if let Some((slot, ends)) = pick(k, &spans.next().unwrap_or_default()) {
+                    raw.push((a, b, k, l, g, slot, ends));
+                }
+            }
             Raw::Lead(i, g) => {
                 for (a, b, span) in lead_parts.get_mut(i).and_then(Option::take).unwrap_or_default() {
-                    raw.push((a, b, Kind::Thread, false, Some(g), span));
+                    if let Some((slot, ends)) = pick(Kind::Thread, &span) {
+                        raw.push((a, b, Kind::Thread, false, Some(g), slot, ends));
+                    }
                 }
             }
         }
     }
-    raw.sort_by_key(|w| w.0);
+    drop(spans);
+    // Listed in time order as a rule: sorted (stably) only when not.
+    if !raw.is_sorted_by_key(|w| w.0) {
+        raw.sort_by_key(|w| w.0);
+    }
     let mut counts = [0usize; 3];
-    let mut out = Vec::new();
-    for (t0, t1, kind, locked, code, span) in raw {
-        let slot = match kind {
-            Kind::Stroke => match tap {
-                Some(tap) => tap.slot,
-                None => continue,
-            },
-            _ => match span.furthest() {
-                Some(s) => s,
-                None => continue,
-            },
-        };
+    let mut out = Vec::with_capacity(raw.len());
+    for (t0, t1, kind, locked, code, slot, ends) in raw {
         let div = if axes.iter().any(|a| a.index == slot && a.diameter) { 2.0 } else { 1.0 };
         let k = kind as usize;
         counts[k] += 1;
-        let end = |i: usize| span.ends[i].map_or(0.0, |e| e[slot]);
-        let ends = [end(0), end(1)];
         out.push(Window { t0, t1, slot, div, kind, locked, n: counts[k], code, ends });
     }
     out
@@ -444,5 +503,51 @@ mod tests {
         let t = m.run_to_trace(&m.parse(&mixed).unwrap(), &nc_engine::RunOptions::default());
         let cuts = t.events.iter().filter(|e| matches!(e.event, Event::Phase(Phase::Cutting))).count();
         assert!(cuts >= 4, "the mixed loop taps and drills twice: {cuts} cuts");
+    }
+
+    /// The first pass plans as it reads: a lean skeleton (no phases, blocks or inputs kept) gives
+    /// the same plan, phases and inputs as the whole one and as `plan` over the whole one's
+    /// events, for thread blocks found by their lead (KND), thread passes by phase (GSK G92.3,
+    /// LinuxCNC G33) and rigid strokes (Fanuc).
+    #[test]
+    fn a_lean_first_pass_plans_as_the_whole_one() {
+        use crate::check::survey::{Skeleton, Source};
+        use nc_engine::{Machine, RunOptions};
+        let programs = [
+            (
+                "knd-lathe",
+                "G00 X30 Z5;\nM03 S600;\nG32 Z-20 F2;\nG00 X40;\nZ5;\nG92 X28 Z-20 F2;\nX27;\nM30;\n",
+            ),
+            ("gsk-lathe", "G0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\nG0 X60;\nM30;\n"),
+            ("linuxcnc", "G18 G21 M3 S600\nG4 P0.5\nG0 X10 Z5\nG33 Z-20 K1.5\nG0 X12\nM2\n"),
+            ("fanuc-mill", &crate::check::holes::program(3)),
+        ];
+        for (dialect, text) in programs {
+            let m = Machine::new(dialect).unwrap();
+            let p = m.parse(text).unwrap();
+            let run = |sink: &mut dyn nc_engine::trace::TraceSink| m.run(&p, &RunOptions::default(), sink);
+            let mut whole = Skeleton::of(Source::Run(&run));
+            let mut lean = Skeleton::of_lean(Source::Run(&run), true);
+            let (pw, pl) = (whole.plan(), lean.plan());
+            let trace = whole.trace();
+            let pt = plan(&trace, whole.end_us);
+            assert!(!pw.raw.is_empty(), "{dialect}: no synchronised move planned");
+            for q in [&pl, &pt] {
+                assert_eq!(
+                    format!("{:?} {:?} {:?}", pw.raw, pw.spans, pw.lead),
+                    format!("{:?} {:?} {:?}", q.raw, q.spans, q.lead),
+                    "{dialect}"
+                );
+            }
+            assert_eq!(whole.phases, lean.phases, "{dialect}");
+            assert_eq!(whole.inputs, lean.inputs, "{dialect}");
+            let kept: Vec<_> = trace
+                .events
+                .iter()
+                .filter(|e| !matches!(e.event, Event::Phase(_) | Event::Block { .. } | Event::Input { .. }))
+                .cloned()
+                .collect();
+            assert_eq!(kept, lean.trace().events, "{dialect}");
+        }
     }
 }

@@ -48,7 +48,7 @@ impl Default for Tolerances {
 /// Milliseconds to µs (negative and non-finite values count as 0).
 pub fn ms_us(ms: f64) -> i64 {
     if ms.is_finite() && ms > 0.0 {
-        (ms * 1000.0).round() as i64
+        nc_engine::units::round_i64(ms * 1000.0)
     } else {
         0
     }
@@ -57,7 +57,7 @@ pub fn ms_us(ms: f64) -> i64 {
 /// Millimetres to nm.
 pub fn mm_nm(mm: f64) -> i64 {
     if mm.is_finite() && mm > 0.0 {
-        (mm * 1e6).round() as i64
+        nc_engine::units::round_i64(mm * 1e6)
     } else {
         0
     }

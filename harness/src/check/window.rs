@@ -33,8 +33,9 @@ pub struct Window<'a> {
     pub cum: Vec<f64>,
     /// The index of the last lookup: recorded times mostly grow, so the next one starts there.
     pub hint: usize,
-    /// The last answers of [`Window::first_at_or_after`] and [`Window::first_after`].
-    hints: [usize; 5],
+    /// The last answers of the walking lookups, by slot: [`Window::first_at_or_after`] and
+    /// [`Window::first_after`] (0, 1), the sync search (2 to 4), the envelope's own time (5).
+    hints: [usize; 6],
     /// Samples dropped so far: the index of `t[0]` in the whole run.
     pub base: usize,
     feed: Feed<'a>,
@@ -51,7 +52,7 @@ impl<'a> Window<'a> {
             s: Vec::new(),
             cum: Vec::new(),
             hint: 0,
-            hints: [0; 5],
+            hints: [0; 6],
             base: 0,
             feed,
             last: None,

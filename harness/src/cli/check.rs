@@ -239,7 +239,8 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         machine.run(&program, &run_opts, &mut Capped { inner: sink, discrete: 0, samples: 0 });
     };
     let source = check::Source::Run(&run);
-    let skeleton = check::survey::Skeleton::of(source);
+    // Without temporal rules the phases, blocks and inputs are not kept (memory).
+    let skeleton = check::survey::Skeleton::of_lean(source, expect.is_none());
     if skeleton.end().is_some_and(|e| e.reason == EndReason::OutputLimit) {
         let secs = skeleton.end_us as f64 / 1e6;
         let mut e = InputError::new(
@@ -274,7 +275,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
     }
     // The recorded stream.
-    let mut importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
+    let importer = import::open(&args.trace, &opts).map_err(|e| import_error(&e))?;
     // A JSON Lines trace names its dialect: one other than the reference's is a mistake in the
     // command line, not 25 divergences.
     if let Some(recorded) = importer.meta().trace.as_ref().map(|m| m.dialect) {
@@ -293,6 +294,8 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
     }
     let carried = check::Carried::of(importer.meta());
+    // Parsed on a thread of its own, a few batches ahead: the comparison runs on this one.
+    let mut importer = importer.read_ahead();
     let mut failure: Option<ImportError> = None;
     // The comparison keeps the recorded events other than samples: at most
     // MAX_RECORDED_EVENTS of them (docs/input-limits.md).
@@ -324,7 +327,8 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
         }
     });
     let spec = CheckSpec { tolerances, anchor, expect: expect.as_ref(), rules, carried };
-    let mut progress = super::progress::Progress::new("check");
+    // A bar up to the reference's end (the recording's times are close to the reference's).
+    let mut progress = super::progress::Progress::new("check").with_total(skeleton.end_us.max(0) as u64);
     let mut rep = check::check_surveyed(
         source,
         skeleton,
@@ -354,7 +358,7 @@ fn run_inner(args: &CheckArgs) -> Result<u8, InputError> {
             check::excerpt::fill_recorded(&mut rep, &windows, again.map_while(Result::ok));
         }
     }
-    let warnings = importer.warnings().total();
+    let warnings = importer.finish().warnings().total();
     let trace_name = display_name(&args.trace);
     let mut head = format!("{title}\nrecorded: {trace_name}");
     match (args.spindle_angle, spindle_start) {

@@ -39,7 +39,7 @@ struct SigCol {
 }
 
 struct CsvSource {
-    r: Box<dyn BufRead>,
+    r: Box<dyn BufRead + Send>,
     /// A line that is not wholly in the reader's buffer, copied.
     buf: Vec<u8>,
     rows: Rows,
@@ -169,7 +169,7 @@ fn field_offset(line: &[u8], delim: u8, n: usize) -> usize {
 /// Opens a CSV file: skips the map's `skip_rows`, reads the header and resolves the columns.
 pub(crate) fn open(
     ctx: &mut Ctx,
-    mut r: Box<dyn BufRead>,
+    mut r: Box<dyn BufRead + Send>,
     map: &ColumnMap,
 ) -> Result<(RecordedMeta, Box<dyn Source>), ImportError> {
     let Some(time) = &map.time else {

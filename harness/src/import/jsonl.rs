@@ -177,7 +177,7 @@ fn parse<'a>(ctx: &'a Ctx, no: u64, text: &'a [u8]) -> Result<Line<'a>, ImportEr
 }
 
 struct JsonlSource {
-    r: Box<dyn BufRead>,
+    r: Box<dyn BufRead + Send>,
     buf: Vec<u8>,
     line_no: u64,
     axes: Vec<AxisSpec>,
@@ -191,7 +191,7 @@ struct JsonlSource {
 /// Reads the `meta` line.
 pub(crate) fn open(
     ctx: &mut Ctx,
-    mut r: Box<dyn BufRead>,
+    mut r: Box<dyn BufRead + Send>,
 ) -> Result<(RecordedMeta, Box<dyn Source>), ImportError> {
     let mut buf = Vec::new();
     let mut line_no = 0;

@@ -13,6 +13,7 @@
 //! since the Unix epoch); [`RecordedMeta::first_t_us`] is the first event's time. Aligning a
 //! recorded trace with the reference is the comparison's job.
 
+pub mod ahead;
 pub mod csv;
 pub mod error;
 pub mod fuzz;
@@ -147,7 +148,7 @@ impl Ctx {
 }
 
 /// One format's reader after its header.
-pub(crate) trait Source {
+pub(crate) trait Source: Send {
     /// Reads on, pushing the next events to `out`; `Ok(false)` at the end of the file.
     fn fill(&mut self, ctx: &mut Ctx, out: &mut VecDeque<TraceEvent>) -> Result<bool, ImportError>;
 
@@ -236,7 +237,7 @@ pub fn open(path: &Path, opts: &Options<'_>) -> Result<Importer, ImportError> {
 /// As [`open`].
 pub fn from_reader(
     name: &str,
-    reader: Box<dyn BufRead>,
+    reader: Box<dyn BufRead + Send>,
     opts: &Options<'_>,
 ) -> Result<Importer, ImportError> {
     from_reader_with(name, reader, opts, false)
@@ -245,7 +246,7 @@ pub fn from_reader(
 /// [`from_reader`], with `general_only` to read JSON Lines without its fast path.
 pub(crate) fn from_reader_with(
     name: &str,
-    mut reader: Box<dyn BufRead>,
+    mut reader: Box<dyn BufRead + Send>,
     opts: &Options<'_>,
     general_only: bool,
 ) -> Result<Importer, ImportError> {

@@ -141,7 +141,7 @@ pub(crate) fn parse_time(s: &[u8]) -> Option<u64> {
 }
 
 struct ShdrSource {
-    r: Box<dyn BufRead>,
+    r: Box<dyn BufRead + Send>,
     buf: Vec<u8>,
     line_no: u64,
     map: Option<ColumnMap>,
@@ -154,7 +154,7 @@ struct ShdrSource {
 /// Sets up an SHDR reader (SHDR has no header).
 pub(crate) fn open(
     ctx: &mut Ctx,
-    r: Box<dyn BufRead>,
+    r: Box<dyn BufRead + Send>,
     map: Option<&ColumnMap>,
 ) -> Result<(RecordedMeta, Box<dyn Source>), ImportError> {
     let (axes, spindle, signals) = match map {

@@ -44,7 +44,7 @@ const PHASES: [Phase; 6] =
 const BATCH: usize = 1024;
 
 struct VcdSource {
-    p: vcd::Parser<Box<dyn BufRead>>,
+    p: vcd::Parser<Box<dyn BufRead + Send>>,
     vars: HashMap<IdCode, Vec<Target>>,
     /// µs = ticks × num / den.
     num: u128,
@@ -117,9 +117,9 @@ fn target(scope: &str, v: &vcd::Var) -> Option<Target> {
 /// Reads the definitions up to `$enddefinitions`.
 pub(crate) fn open(
     ctx: &mut Ctx,
-    r: Box<dyn BufRead>,
+    r: Box<dyn BufRead + Send>,
 ) -> Result<(RecordedMeta, Box<dyn Source>), ImportError> {
-    let mut p = vcd::Parser::new(Box::new(scope_depth::ScopeDepth::new(r)) as Box<dyn BufRead>);
+    let mut p = vcd::Parser::new(Box::new(scope_depth::ScopeDepth::new(r)) as Box<dyn BufRead + Send>);
     let header = p.parse_header().map_err(|e| {
         let mut e = io_err(ctx, p.line(), &e);
         if e.kind != ErrorKind::Io {
