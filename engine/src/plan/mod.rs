@@ -170,6 +170,11 @@ pub enum FollowKind {
         /// Direction.
         forward: bool,
     },
+    /// The spindle, already commanded its other sense, ramps through zero; the axis follows it,
+    /// braking behind it, to the instant it turns the other way, overshooting by lead × the
+    /// revolutions turned meanwhile (LinuxCNC's G33.1 past the start: the spindle is not brought
+    /// to rest).
+    Reversal,
     /// The axis alone, unsynchronised, to the target at its rapid rate and time constant; the
     /// spindle keeps its own state (LinuxCNC's final move back to the G33.1 start).
     Unsynced,

@@ -216,7 +216,7 @@ pub fn run_engine(text: &str) -> Result<Outcome, String> {
                         FollowKind::Return { .. } | FollowKind::Through { .. } | FollowKind::Unsynced => {
                             cur = p
                         }
-                        FollowKind::Brake { .. } => {}
+                        FollowKind::Brake { .. } | FollowKind::Reversal => {}
                     }
                 }
                 _ => {}
