@@ -286,6 +286,13 @@ pub enum Step {
     End,
     /// Raise an alarm at this point of the execution and stop.
     Alarm(Alarm),
+    /// Report an alarm at this point and go on: the motion queued before it still runs (LinuxCNC's
+    /// read-ahead finding an error while reading a line ahead of motion, LCNC-LEX-05; a
+    /// [`Step::Halt`] follows where the program stops).
+    Report(Alarm),
+    /// The run ends here on the alarm already reported by a [`Step::Report`] (end reason
+    /// `alarm`, no second alarm).
+    Halt,
     /// An axis locked to a spindle in speed mode (the spindle leads, the axis follows its
     /// encoder): see [`Follow`].
     Follow(Follow),
