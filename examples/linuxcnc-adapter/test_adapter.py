@@ -11,6 +11,7 @@ harness/tests/linuxcnc_adapter.rs, or `NC_CONFORM=target/debug/nc-conform python
 """
 
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -105,6 +106,48 @@ def row(cycle, z=0.0, rpm=0.0, revs=0.0, cmd=0.0, on=0, fwd=0, rev=0, line=0, mt
     return {"n": cycle, "X": 0.0, "Y": 0.0, "Z": z, "rpm": rpm, "revs": revs, "speed_cmd": cmd,
             "clock": cycle / 1000.0, "on": on, "fwd": fwd, "rev": rev, "at_speed": 0, "index": index,
             "inpos": 1, "flood": 0, "mist": 0, "line": line, "mtype": mtype, "cycle": cycle}
+
+
+def power_on_mdi():
+    """The agent's power-on blocks (lcnc_agent.POWER_ON_MDI), read from its source: the agent
+    imports LinuxCNC's own modules."""
+    import ast
+
+    src = open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "lcnc_agent.py")).read()
+    for node in ast.parse(src).body:
+        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "POWER_ON_MDI":
+            return [line.format(path_mode="G61.1") for line in ast.literal_eval(node.value)]
+    raise AssertionError("no POWER_ON_MDI in lcnc_agent.py")
+
+
+class PowerOn(unittest.TestCase):
+    # A program before (a G88 with P0.3, M49) and, after the power-on blocks, a G84 without P.
+    BEFORE = ["G21 G17 M3 S500 F200", "G0 X0 Y0 Z10", "G88 X5 Z-5 R2 P0.3", "G80", "M49"]
+    AFTER = ["M3 S600 F600", "G0 Z5", "G84 Z-3 R2", "M2"]
+
+    def test_power_on_clears_what_a_program_leaves_in_the_interpreter(self):
+        # LinuxCNC keeps a canned cycle's P for the next cycle without P across programs, and a
+        # G84 enables the overrides again only when they were on as it was read (X3: a G84 dwelt
+        # 0.3 s at the bottom after cycles/g88). Oracle: LinuxCNC's own interpreter (rs274 -g).
+        blocks = power_on_mdi()
+        self.assertIn("M48", blocks)
+        rs274 = shutil.which("rs274")
+        if rs274 is None:  # without LinuxCNC: the blocks that do it are there
+            self.assertTrue(any(" P0 " in f" {b} " and "G82" in b and "R0" in b for b in blocks), blocks)
+            return
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "p.ngc")
+            with open(path, "w") as f:
+                f.write("\n".join(self.BEFORE + blocks + self.AFTER) + "\n")
+            out = subprocess.run([rs274, "-g", path], capture_output=True, text=True, timeout=60,
+                                 stdin=subprocess.DEVNULL).stdout
+        canon = [l.split("N..... ", 1)[1] for l in out.splitlines() if "N..... " in l]
+        g84 = canon[max(i for i, l in enumerate(canon) if l.startswith("STRAIGHT_TRAVERSE")):]
+        self.assertIn("DWELL(0.3000)", canon)  # the G88's
+        self.assertIn("DWELL(0.0000)", g84, g84)
+        self.assertNotIn("DWELL(0.3000)", g84, g84)
+        self.assertIn("ENABLE_FEED_OVERRIDE()", g84, g84)
+        self.assertIn("ENABLE_SPEED_OVERRIDE(0)", g84, g84)
 
 
 class Recording(unittest.TestCase):
