@@ -375,8 +375,12 @@ class Run:
         started = False
         held_since = None
         reset_at = None
+        last_pos, moved_at = None, c_run
         while end is None:
             now = clock.now()
+            pos = (hal.get_value("Xpos"), hal.get_value("Ypos"), hal.get_value("Zpos"))
+            if pos != last_pos:
+                last_pos, moved_at = pos, now
             st = self.state()
             if st != last:
                 self.states.append({"cycle": now, "interp": st[0], "paused": st[1], "task": st[2], "exec": st[3],
@@ -422,7 +426,9 @@ class Run:
                         self.give({"name": "cycle_start"}, now)
                         self.given[-1]["auto"] = True
                 elif not pending:
-                    held_since = held_since if held_since is not None else now
+                    # held for hold_ms with the axes standing: a pause LinuxCNC defers (inside
+                    # a synchronised move) has taken effect by then
+                    held_since = max(held_since if held_since is not None else now, moved_at)
                     if now - held_since > req.get("hold_ms", 500) * per_ms:
                         end = {"reason": "stopped", "cycle": now}
                 else:

@@ -73,8 +73,17 @@ def dumps(obj):
     return json.dumps(obj, ensure_ascii=False)
 
 
+# Motion's pins written from its status of the servo cycle before: its controller writes the HAL
+# (control.c `output_to_hal`: motion.program-line = emcmotStatus->id, motion.motion-type =
+# emcmotStatus->motionType) before it takes the planner's status of this cycle (`update_status`),
+# while the joints' positions written there are this cycle's. A new line or motion type shows one
+# servo period after its first position change.
+LAGGING = ("line", "mtype")
+
+
 def read_rows(path, period_us):
-    """The recording as rows of numbers keyed by servo cycle (from the clock column)."""
+    """The recording as rows of numbers keyed by servo cycle (from the clock column), motion's
+    line and motion type moved back to the cycle of the positions they belong to (`LAGGING`)."""
     rows = []
     with open(path) as f:
         for line in f:
@@ -84,6 +93,10 @@ def read_rows(path, period_us):
             r = dict(zip(COLUMNS, (float(x) for x in v)))
             r["cycle"] = int(round(r["clock"] * 1e6 / period_us))
             rows.append(r)
+    for a, b in zip(rows, rows[1:]):
+        if b["cycle"] == a["cycle"] + 1:
+            for k in LAGGING:
+                a[k] = b[k]
     return rows
 
 
@@ -186,6 +199,7 @@ class Trace:
         self.blocks = 0
         self.alarms = 0
         self.stopped_by = None
+        self.hold_at = None
 
     def acted(self):
         """A reset or E-stop acts before LinuxCNC's task reports it taken (its echo comes once the
@@ -199,6 +213,7 @@ class Trace:
             for r in self.rows:
                 if g["sent"] < r["cycle"] <= g["cycle"] and prev is not None and prev["on"] and not r["on"]:
                     g["cycle"] = r["cycle"]
+                    g["acted"] = True
                     break
                 prev = r
 
@@ -303,9 +318,10 @@ class Trace:
                 st = states.pop(0)
                 if st["interp"] != 1 or st["paused"]:
                     if st["paused"]:
-                        # paused from here; SPL once the axes are at rest (below), as the
-                        # reference reports a hold where it took effect
+                        # paused from here; SPL where the hold took effect (below), as the
+                        # reference reports a hold
                         self.pause_pending = True
+                        self.hold_at = self.hold_effect(st["cycle"], end_c)
                     else:
                         self.pause_pending = False
                         self.signal(t, "SPL", 0)
@@ -325,9 +341,7 @@ class Trace:
                     line = ie["line"]
                 self.alarm(t, alarm_code(m["text"]), m["text"].strip(), line)
             self.row(prev, r, t)
-            # (not while a synchronised move waits for its index: LinuxCNC defers the pause)
-            if (getattr(self, "pause_pending", False) and not r["index"]
-                    and not any(abs(r[a] - prev[a]) > 1e-9 for a in "XYZ")):
+            if getattr(self, "pause_pending", False) and self.hold_at is not None and c >= self.hold_at:
                 self.pause_pending = False
                 self.signal(t, "SPL", 1)
                 self.signal(t, "STL", 0)
@@ -355,6 +369,42 @@ class Trace:
         self.emit(t, o)
         self.alarms += 1
 
+    def standstill_from(self, upto):
+        """The first servo cycle of the standstill that lasts up to cycle `upto` (the first row in
+        which no axis moved from the row before, as every row after it up to `upto`), or None
+        when the axes moved into `upto`."""
+        cycles = sorted(c for c in self.by_cycle if c <= upto)
+        if not cycles or cycles[-1] != upto:
+            return None
+        since = None
+        for a, b in zip(reversed(cycles[:-1]), reversed(cycles)):
+            ra, rb = self.by_cycle[a], self.by_cycle[b]
+            if any(abs(rb[k] - ra[k]) > 1e-9 for k in "XYZ"):
+                break
+            since = b
+        return since
+
+    def hold_effect(self, paused, end_c):
+        """The servo cycle a pause reported at cycle `paused` took effect: where the axes came to
+        the standstill that lasts until the program went on (the task left its paused state or a
+        cycle start was taken) or the run's end; None when motion never held (it still moved when
+        the program went on). LinuxCNC defers a pause inside a spindle-synchronised move (G33,
+        G33.1, G76's passes run to their end: tp.c `tpGetFeedScale` pauses TC_SYNC_NONE and
+        velocity-synchronised segments only) and while a move waits for at-speed or the index;
+        the axes standing still in those waits is not yet the hold."""
+        ends = [st["cycle"] for st in self.agent.get("states", []) if st["cycle"] > paused and not st["paused"]]
+        ends += [g["cycle"] for g in self.agent.get("given", [])
+                 if g["input"]["name"] == "cycle_start" and g["cycle"] is not None and g["cycle"] > paused]
+        resume = min(ends + [end_c])
+        # the last row the machine stood in before it went on
+        upto = max((c for c in self.by_cycle if c <= resume), default=None)
+        if upto is None:
+            return None
+        since = self.standstill_from(upto)
+        if since is None:
+            return None
+        return max(since, paused)
+
     def end_cycle(self, rows):
         """The cycle the run ends at and its reason: a reset or E-stop where it acted, a time limit
         where it falls, else once nothing changes any more (the spindle stopped and ZSP reported)."""
@@ -368,9 +418,12 @@ class Trace:
                 return end["cycle"], reason
             return self.t0 + end["limit_cycles"], reason
         if reason == "stopped":
-            # held with nothing to release it: the run ends where the hold began
+            # held with nothing to release it: the run ends where the hold took effect
             holds = [st["cycle"] for st in self.agent.get("states", []) if st["paused"]]
-            return (max(holds[-1], self.t0) if holds else end["cycle"]), reason
+            if not holds:
+                return end["cycle"], reason
+            at = self.hold_effect(holds[-1], end["cycle"])
+            return max(at if at is not None else holds[-1], self.t0), reason
         if end.get("estop"):
             es = [g["cycle"] for g in self.agent.get("given", [])
                   if g["input"]["name"] == "emergency_stop" and g["input"].get("on")]
@@ -518,7 +571,10 @@ class Trace:
         if kind == "g76":
             if mtype == MOTION_FEED and moving and ph != "cutting":
                 self.set_phase(t, "cutting")
-            elif ph == "cutting" and mtype == MOTION_TRAVERSE and moving:
+            elif ph == "cutting" and abs(r["X"] - p["X"]) > 1e-9 and (
+                    mtype == MOTION_TRAVERSE or abs(r["Z"] - p["Z"]) < 1e-9):
+                # the rapid out begins with X: the pass's last servo period may already show
+                # the traverse's type while only Z ends its cut (a feed hold stops there)
                 self.set_phase(t, "retract")
             elif ph == "retract" and moving and abs(r["Z"] - p["Z"]) > 1e-9 and abs(r["X"] - p["X"]) < 1e-9:
                 self.set_phase(t, "positioning")
@@ -549,7 +605,7 @@ class Trace:
     def finish_program(self, end_c, reason):
         """At the end: the cycle left, the program end's block and M2/M30 when LinuxCNC reached it."""
         t = self.t(end_c)
-        if getattr(self, "pause_pending", False):
+        if getattr(self, "pause_pending", False) and self.hold_at is not None and self.hold_at <= end_c:
             self.pause_pending = False
             self.signal(t, "SPL", 1)
             self.signal(t, "STL", 0)

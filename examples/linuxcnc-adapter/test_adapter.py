@@ -210,6 +210,34 @@ class Recording(unittest.TestCase):
         # not at the paused report (cycle 114, 4 ms) but at cycle 117, the first without motion
         self.assertEqual(spl, [7000])
 
+    def test_a_pause_in_a_synchronised_move_is_reported_where_motion_holds(self):
+        # I1: feed hold during a G33.1 at cycle 117: LinuxCNC runs the tap to its end (tp.c pauses
+        # unsynchronised segments only); the tap stands still at its reversal (121-123) and holds
+        # once back at the start (from 129); the cycle start is taken at 140
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(c, rpm=30, cmd=500, on=1, fwd=1) for c in range(110, 115)]
+        z = [5 - 0.1 * k for k in range(6)] + [4.5] * 3 + [4.5 + 0.1 * k for k in range(1, 6)] + [5.0] * 16
+        rows += [row(115 + k, z=v, rpm=30, cmd=500, on=1, fwd=1, line=3) for k, v in enumerate(z)]
+        agent = {"c_run": 105, "messages": [],
+                 "given": [{"cycle": 117, "sent": 116, "due": 117, "input": {"name": "feed_hold"}},
+                           {"cycle": 140, "sent": 139, "due": 140, "input": {"name": "cycle_start"}}],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 117, "interp": 3, "paused": True, "task": 4},
+                            {"cycle": 141, "interp": 2, "paused": False, "task": 4}],
+                 "end": {"reason": "time_limit", "cycle": 144, "settled": 144}}
+        ev = lcnc_trace.Trace("G21 M3 S500\nG0 X0 Z5\nG33.1 Z-1 K1\nG0 Z20\nM2\n", rows, agent, self.CFG,
+                              1000).build()
+        spl = [(e["t_us"], e["value"]) for e in ev if e["kind"] == "signal" and e["name"] == "SPL"]
+        # not at the reversal (121, 11 ms) but where the tap stands back at the start (129)
+        self.assertEqual(spl, [(19000, 1), (30000, 0)])
+        # a run held with nothing to release it ends where the hold took effect
+        agent = dict(agent, given=agent["given"][:1], states=agent["states"][:2],
+                     end={"reason": "stopped", "cycle": 144})
+        tr = lcnc_trace.Trace("G21 M3 S500\nG0 X0 Z5\nG33.1 Z-1 K1\nG0 Z20\nM2\n", rows, agent, self.CFG, 1000)
+        ev = tr.build()
+        self.assertEqual(ev[-1]["t_us"], 19000)
+        self.assertIn({"t_us": 19000, "kind": "signal", "name": "SPL", "value": 1}, ev)
+
     def test_the_line_before_an_armed_move_is_not_entered_again(self):
         ev = lcnc_trace.Trace(self.PROGRAM, self.rows_line_lagging(), self.AGENT, self.CFG, 1000).build()
         blocks = [e["line"] for e in ev if e["kind"] == "block"]
@@ -226,6 +254,26 @@ class Recording(unittest.TestCase):
                 r["line"] = 2
         return rows
 
+    def test_motions_line_and_type_are_read_with_the_positions_they_belong_to(self):
+        # Q1: motion writes motion.program-line and motion.motion-type from the cycle before
+        # (control.c output_to_hal before update_status): in the recording the G76's retract (a
+        # traverse, line 4) shows one period after X left 9.2, and the retract was stamped there
+        def rec(c, x, line, mtype):
+            r = row(c, line=line, mtype=mtype)
+            r["X"] = x
+            return " ".join(str(r[k]) for k in lcnc_trace.COLUMNS)
+
+        text = [rec(100, 9.2, 3, 2), rec(101, 9.2, 3, 2), rec(102, 9.201953, 3, 2), rec(103, 9.21, 4, 1),
+                rec(104, 9.23, 4, 1), "overrun", rec(106, 9.25, 4, 1)]
+        with tempfile.NamedTemporaryFile("w", suffix=".txt", delete=False) as f:
+            f.write("\n".join(text) + "\n")
+        try:
+            rows = lcnc_trace.read_rows(f.name, 1000)
+        finally:
+            os.unlink(f.name)
+        self.assertEqual([(r["cycle"], r["line"], r["mtype"]) for r in rows],
+                         [(100, 3, 2), (101, 3, 2), (102, 4, 1), (103, 4, 1), (104, 4, 1), (106, 4, 1)])
+
     def test_exact_decimals(self):
         for x, digits, want in [(0.000001, 6, "0.000001"), (-12.5, 6, "-12.5"), (50.0, 6, "50"),
                                 (-0.0000004, 6, "0"), (359.9996, 3, "360"), (2.999994, 6, "2.999994")]:
@@ -236,6 +284,42 @@ class Recording(unittest.TestCase):
         self.assertEqual(lcnc_trace.alarm_code("Cannot feed with zero feed rate"), "NC-1091")
         self.assertEqual(lcnc_trace.alarm_code("K word missing with g33/g33.1"), "NC-1096")
         self.assertEqual(lcnc_trace.alarm_code("Spindle not turning in g88"), "NC-1095")
+
+
+class Leads(unittest.TestCase):
+    class Args:
+        log = None
+        keep = None
+        max_run_s = 120
+
+    def adapter(self, lates):
+        """An adapter whose LinuxCNC runs answer with these input timings in turn (late_us)."""
+        a = lcnc_adapter.Adapter(self.Args())
+        a.sc = lcnc_adapter.Scenario({}, {"period_us": 1000})
+        runs = []
+
+        def run_once():
+            late = lates[len(runs)]
+            runs.append(dict(a.leads))
+            a.leads["reset"] = 24000  # the task took the reset 24 ms after it was sent
+            return {"events": [], "inputs": [{"input": "reset", "late_us": late}]}
+
+        a.run_once = run_once
+        return a, runs
+
+    def test_an_input_late_by_its_unknown_latency_is_given_again_earlier(self):
+        # I2: cycles/g81_reset's reset acted 24 ms after its time, the first reset of the session
+        a, runs = self.adapter([24000, 1000])
+        a.run()
+        self.assertEqual(runs, [{}, {"reset": 24000}])  # run again with the measured lead
+        # with the lead known, one run; on time, one run
+        a, runs = self.adapter([24000])
+        a.leads["reset"] = 20000
+        a.run()
+        self.assertEqual(len(runs), 1)
+        a, runs = self.adapter([1000])
+        a.run()
+        self.assertEqual(len(runs), 1)
 
 
 class Conditions(unittest.TestCase):
