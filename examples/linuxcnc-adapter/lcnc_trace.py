@@ -122,6 +122,7 @@ def alarm_code(text):
 # ---- the program text: which lines are cycles and what they carry ----
 
 WORD = re.compile(r"([A-Za-z])\s*([-+]?\d*\.?\d+)")
+OWORD = re.compile(r"^\s*(?:/\s*)?(?:[Nn]\d+\s*)?[Oo]\s*(\d+|<[^>]*>)\s*(sub|endsub|call)\b", re.I)
 
 
 def words(line):
@@ -173,6 +174,25 @@ class Program:
     def is_block(self, line):
         t = self.text(line)
         return bool(t) and not t.startswith(("(", ";", "%"))
+
+    def call_of(self, line, after):
+        """When `line` is inside an o-word subroutine's body: the first line at or after `after`
+        that calls that subroutine (its body runs when the call is executed, LinuxCNC's motion
+        then names the body's line), else None."""
+        name = None
+        for i in range(1, min(line, len(self.lines)) + 1):
+            m = OWORD.match(self.lines[i - 1])
+            if m and m.group(2).lower() == "sub":
+                name = m.group(1).lower()
+            elif m and m.group(2).lower() == "endsub" and i < line:
+                name = None
+        if name is None:
+            return None
+        for i in range(max(after, 1), len(self.lines) + 1):
+            m = OWORD.match(self.lines[i - 1])
+            if m and m.group(1).lower() == name and m.group(2).lower() == "call":
+                return i
+        return None
 
 
 def tool_axis(plane):
@@ -521,7 +541,13 @@ class Trace:
         if self.cur is not None and self.prog.kind.get(self.cur):
             self.leave_cycle(t)
         self.cur = line
-        if line >= self.next_block:
+        call = self.prog.call_of(line, self.next_block) if line >= self.next_block else None
+        if call is not None:
+            # a subroutine's body defined before its call: its lines were read (the reference
+            # lists them as read), the call ran, then the body's line that LinuxCNC's motion
+            # names (X2)
+            self.block(t, call)
+        elif line >= self.next_block:
             self.block(t, line)
         else:  # a line run again (an o-word loop or subroutine)
             self.next_block, saved = line, self.next_block

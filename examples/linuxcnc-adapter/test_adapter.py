@@ -113,7 +113,8 @@ def power_on_mdi():
     imports LinuxCNC's own modules."""
     import ast
 
-    src = open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "lcnc_agent.py")).read()
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "lcnc_agent.py")) as f:
+        src = f.read()
     for node in ast.parse(src).body:
         if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "POWER_ON_MDI":
             return [line.format(path_mode="G61.1") for line in ast.literal_eval(node.value)]
@@ -273,6 +274,49 @@ class Recording(unittest.TestCase):
             os.unlink(f.name)
         self.assertEqual([(r["cycle"], r["line"], r["mtype"]) for r in rows],
                          [(100, 3, 2), (101, 3, 2), (102, 4, 1), (103, 4, 1), (104, 4, 1), (106, 4, 1)])
+
+    def test_a_subroutines_body_runs_after_its_call(self):
+        # X2 (lex/sub_while_arc_as_rs274): LinuxCNC's motion names the sub's body line (3) for
+        # the call's feed; the call (line 11) ran before it, the arc (line 12) comes 1.129 s later
+        prog = ("%\no100 sub\n  g1 x[#1] y[#2] f[#3 * 2]\no100 endsub\nN10 g17 g21 g90 g94\n/#<depth> = -2\n#5 = 3\n"
+                "o200 while [#5 GT 1]\n  #5 = [#5 - 1]\no200 endwhile\no100 call [10] [#5 * 5] [300]\n"
+                "G2 X20 Y5 I5 J0 (arc)\ng0 z[#<depth>]\nM2\n%\n")
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(110 + k, z=0.0, line=3, mtype=2) for k in range(5)]
+        for r in rows[-5:]:
+            r["X"] = 0.01 * (r["cycle"] - 109)
+        rows += [row(115 + k, line=12, mtype=2) for k in range(3)]
+        for r in rows[-3:]:
+            r["X"], r["Y"] = 10.0 + 0.01 * (r["cycle"] - 114), 5.0
+        agent = dict(self.AGENT, end={"reason": "program_end", "cycle": 117, "settled": 117})
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        blocks = {e["line"]: e["t_us"] for e in ev if e["kind"] == "block"}
+        self.assertEqual(blocks[11], 0)  # the call, with its feed
+        self.assertEqual(blocks[3], 0)
+        self.assertEqual(blocks[12], 5000)
+        self.assertEqual([e["line"] for e in ev if e["kind"] == "block"].count(3), 1)
+
+    def test_g76s_retract_begins_with_x(self):
+        # Q1 / I1: the pass's last servo period already shows the traverse's motion type while
+        # only Z ends its cut; the retract is where X leaves the thread's depth
+        prog = "G18 G21 M3 S600\nG0 X7 Z3\nG76 P1.5 Z-20 I-1 J0.5 K0.92\nM2\n"
+
+        def phases(x_at_115):
+            rows = [row(c) for c in range(100, 110)]
+            rows += [row(110 + k, z=3 - 0.1 * k, line=3, mtype=2) for k in range(5)]
+            rows += [row(115 + k, z=2.599, line=3, mtype=1) for k in range(10)]
+            for r in rows[10:]:
+                r["X"] = 5.5
+            for r in rows[15:]:
+                r["X"] += x_at_115 * (r["cycle"] - 114)
+            agent = dict(self.AGENT, end={"reason": "time_limit", "cycle": 124, "limit_cycles": 14})
+            ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+            return [(e["t_us"], e["name"]) for e in ev if e["kind"] == "phase"]
+
+        # held after the pass: X stands, the phase stays cutting
+        self.assertEqual(phases(0.0)[-1], (0, "cutting"))
+        # the rapid out: retract from the first period X moves
+        self.assertEqual(phases(0.0001)[-1], (5000, "retract"))
 
     def test_exact_decimals(self):
         for x, digits, want in [(0.000001, 6, "0.000001"), (-12.5, 6, "-12.5"), (50.0, 6, "50"),
