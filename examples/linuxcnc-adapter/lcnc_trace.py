@@ -21,8 +21,8 @@ The mapping (examples/linuxcnc-adapter/README.md says it for users):
   program end; M8/M7/M9 from the coolant pins. Each function has its strobe and FIN at the same
   µs: LinuxCNC has no completion handshake (the dialect's `plc.fin_ms` = 0).
 - **signals**: STL (program running, not paused), SPL (paused: feed hold, single-block step, M0),
-  ZSP (spindle standing for `plc.zsp_ms`, falling with a start command or motion), ESP (LinuxCNC's
-  E-stop state).
+  ZSP (spindle standing for `plc.zsp_ms`, falling when it turns: a stalled spindle started stays
+  at zero speed), ESP (LinuxCNC's E-stop state).
 - **blocks**: a line starts when its motion starts (`motion.program-line`), or with the first
   spindle/coolant change it makes; lines without an observable action start with the next one
   that has it.
@@ -499,7 +499,8 @@ class Trace:
                     self.function(t, "M", 3 if sr > 0 else 4)
             else:
                 self.spindle_change(t, sp, sr)
-            if sr != 0 and sp == 0:
+            if sr != 0 and sp == 0 and abs(r["rpm"]) >= 1e-9:
+                # started and turning; a stalled spindle (T2) stays at zero speed
                 self.signal(t, "ZSP", 0)
         for pin, on_code in (("flood", 8), ("mist", 7)):
             if p[pin] != r[pin]:

@@ -318,6 +318,20 @@ class Recording(unittest.TestCase):
         # the rapid out: retract from the first period X moves
         self.assertEqual(phases(0.0001)[-1], (5000, "retract"))
 
+    def test_a_stalled_spindle_started_stays_at_zero_speed(self):
+        # T2 (g84/spindle_never_at_speed): stalled from the start, M3 turns nothing: ZSP stays 1
+        # (the reference's drive); a spindle that turns drops it with its start
+        def zsp(rpm):
+            rows = [row(c) for c in range(100, 110)]
+            rows += [row(110 + k, z=0.1 * (k + 1), line=2, mtype=1) for k in range(5)]
+            rows += [row(115 + k, z=0.5, rpm=rpm, cmd=600, on=1, fwd=1, line=3) for k in range(20)]
+            agent = dict(self.AGENT, end={"reason": "time_limit", "cycle": 134, "limit_cycles": 24})
+            ev = lcnc_trace.Trace("G21\nG0 Z0.5\nM3 S600\nM2\n", rows, agent, self.CFG, 1000).build()
+            return [(e["t_us"], e["value"]) for e in ev if e["kind"] == "signal" and e["name"] == "ZSP"]
+
+        self.assertEqual(zsp(0.0), [(0, 1)])
+        self.assertEqual(zsp(6.0), [(0, 1), (5000, 0)])
+
     def test_exact_decimals(self):
         for x, digits, want in [(0.000001, 6, "0.000001"), (-12.5, 6, "-12.5"), (50.0, 6, "50"),
                                 (-0.0000004, 6, "0"), (359.9996, 3, "360"), (2.999994, 6, "2.999994")]:
