@@ -220,6 +220,11 @@ class Trace:
         self.alarms = 0
         self.stopped_by = None
         self.hold_at = None
+        # the first servo cycle a reset or E-stop was sent: motion aborts from about there (its
+        # stop is the abort's, not a phase of the cycle nor a feed hold taking effect)
+        self.abort_sent = min((g["sent"] for g in agent.get("given", []) if "sent" in g
+                               and g["input"]["name"] in ("reset", "emergency_stop") and g["input"].get("on", True)),
+                              default=None)
 
     def acted(self):
         """A reset or E-stop acts before LinuxCNC's task reports it taken (its echo comes once the
@@ -415,6 +420,8 @@ class Trace:
         ends = [st["cycle"] for st in self.agent.get("states", []) if st["cycle"] > paused and not st["paused"]]
         ends += [g["cycle"] for g in self.agent.get("given", [])
                  if g["input"]["name"] == "cycle_start" and g["cycle"] is not None and g["cycle"] > paused]
+        if self.abort_sent is not None:
+            ends.append(self.abort_sent)
         resume = min(ends + [end_c])
         # the last row the machine stood in before it went on
         upto = max((c for c in self.by_cycle if c <= resume), default=None)
@@ -578,7 +585,7 @@ class Trace:
             self.emit(t, {"kind": "phase", "name": name})
 
     def phases(self, p, r, t, kind):
-        if not kind:
+        if not kind or (self.abort_sent is not None and r["cycle"] >= self.abort_sent):
             return
         ta = tool_axis(self.prog.plane.get(self.cur, 17))
         d = r[ta] - p[ta]

@@ -90,6 +90,23 @@ class MachineConfig(unittest.TestCase):
         self.assertIn("G61.1", exact)
         self.assertNotIn("ARC_BLEND_OPTIMIZATION_DEPTH", ini)
 
+    def test_an_exited_linuxcnc_not_yet_reaped_is_not_running(self):
+        # another engineer's LinuxCNC left zombies for minutes; they hold nothing
+        import time
+
+        pid = os.fork()
+        if pid == 0:
+            os._exit(0)
+        try:
+            for _ in range(100):
+                if lcnc_machine.zombie(pid):
+                    break
+                time.sleep(0.01)
+            self.assertTrue(lcnc_machine.zombie(pid))
+            self.assertFalse(lcnc_machine.zombie(os.getpid()))
+        finally:
+            os.waitpid(pid, 0)
+
     def test_what_linuxcnc_cannot_have_is_not_applicable(self):
         for params, says in [
             ([{"id": "nc.rapid_mm_min", "axis": "Z", "value": 3000}], "slowest axis gives 3000"),
@@ -331,6 +348,27 @@ class Recording(unittest.TestCase):
 
         self.assertEqual(zsp(0.0), [(0, 1)])
         self.assertEqual(zsp(6.0), [(0, 1), (5000, 0)])
+
+    def test_motion_stopping_after_a_reset_is_the_abort(self):
+        # I2 / I1 (cycles/g81_reset, g331/feed_hold_then_reset_mid_stroke): the reset is sent at
+        # 118 (a feed hold was pending since 112), motion stops at 121, the spindle goes off at
+        # 125 (where the reset is stamped): no retract phase, no hold taking effect
+        prog = "G17 G21 G98 M3 S800 F300\nG0 X0 Y0 Z10\nG81 X10 Z-10 R2\nG80 M2\n"
+        rows = [row(c) for c in range(100, 110)]
+        z = [2 - 0.005 * k for k in range(11)] + [1.95 - 0.002, 1.95 - 0.003] + [1.947] * 17
+        rows += [row(110 + k, z=v, rpm=800, cmd=800, on=1 if 110 + k < 125 else 0, fwd=1, line=3, mtype=2)
+                 for k, v in enumerate(z)]
+        agent = {"c_run": 105, "messages": [],
+                 "given": [{"cycle": 112, "sent": 111, "due": 112, "input": {"name": "feed_hold"}},
+                           {"cycle": 140, "sent": 118, "due": 119, "input": {"name": "reset"}}],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 112, "interp": 3, "paused": True, "task": 4},
+                            {"cycle": 139, "interp": 1, "paused": False, "task": 4}],
+                 "end": {"reason": "reset", "cycle": 140}}
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"][-1], "cutting")
+        self.assertFalse([e for e in ev if e["kind"] == "signal" and e["name"] == "SPL" and e["value"]])
+        self.assertEqual((ev[-1]["kind"], ev[-1]["t_us"]), ("end", 15000))
 
     def test_exact_decimals(self):
         for x, digits, want in [(0.000001, 6, "0.000001"), (-12.5, 6, "-12.5"), (50.0, 6, "50"),
