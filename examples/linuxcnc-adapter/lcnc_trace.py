@@ -605,15 +605,20 @@ class Trace:
         if kind == "g76":
             if mtype == MOTION_FEED and moving and ph != "cutting":
                 self.set_phase(t, "cutting")
+                self.cut_from = r["Z"]
             elif ph == "cutting" and abs(r["X"] - p["X"]) > 1e-9 and (
-                    mtype == MOTION_TRAVERSE or abs(r["Z"] - p["Z"]) < 1e-9):
-                # the rapid out begins with X: the pass's last servo period may already show
-                # the traverse's type while only Z ends its cut (a feed hold stops there)
+                    mtype == MOTION_TRAVERSE or abs(r["Z"] - p["Z"]) < 1e-9) and (
+                    abs(r["Z"] - getattr(self, "cut_from", r["Z"])) > 1e-6):
+                # the rapid out begins with X once the pass has cut along Z: the pass's last
+                # servo period may already show the traverse's type while only Z ends its cut
+                # (a feed hold stops there), its first ones the feed's while X ends the infeed
                 self.set_phase(t, "retract")
             elif ph == "retract" and moving and abs(r["Z"] - p["Z"]) > 1e-9 and abs(r["X"] - p["X"]) < 1e-9:
                 self.set_phase(t, "positioning")
             return
         dwell_p = self.prog.p.get(self.cur, 0.0)
+        if not moving and (getattr(self, "pause_pending", False) or self.levels["SPL"]):
+            return  # a feed hold's standstill is not the hole's bottom
         if ph in ("positioning", "retract") and moving and mtype == MOTION_FEED and d < 0:
             self.set_phase(t, "cutting")
         elif ph == "retract" and moving and abs(d) < 1e-9 and kind.startswith("cycle"):

@@ -10,6 +10,7 @@ harness/tests/linuxcnc_adapter.rs, or `NC_CONFORM=target/debug/nc-conform python
 - the stop conditions of `advance` over trace events, an axis crossing at its interpolated µs.
 """
 
+import json
 import os
 import shutil
 import subprocess
@@ -334,6 +335,31 @@ class Recording(unittest.TestCase):
         self.assertEqual(phases(0.0)[-1], (0, "cutting"))
         # the rapid out: retract from the first period X moves
         self.assertEqual(phases(0.0001)[-1], (5000, "retract"))
+        # the infeed's last period already shows the feed's type: the pass has not cut yet
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(110, line=3, mtype=2), row(111, line=3, mtype=2)] + [
+            row(112 + k, z=-0.1 * (k + 1), line=3, mtype=2) for k in range(5)]
+        for r, x in zip(rows[10:], [5.6, 5.5] + [5.5] * 5):
+            r["X"] = x
+        agent = dict(self.AGENT, end={"reason": "time_limit", "cycle": 116, "limit_cycles": 6})
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"], ["positioning", "cutting"])
+
+    def test_a_feed_hold_in_a_drilling_cycle_is_not_its_bottom(self):
+        # I1 (cycles/g81_feed_hold): held in the feed in, the drill stands; G81 (no dwell) goes to
+        # its retract only when it stands at the bottom, not in a hold
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(110 + k, z=2 - 0.01 * k, rpm=800, cmd=800, on=1, fwd=1, line=3, mtype=2) for k in range(8)]
+        rows += [row(118 + k, z=1.93, rpm=800, cmd=800, on=1, fwd=1, line=3, mtype=2) for k in range(12)]
+        agent = {"c_run": 105, "messages": [], "given": [{"cycle": 115, "sent": 114, "due": 115,
+                                                          "input": {"name": "feed_hold"}}],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 115, "interp": 3, "paused": True, "task": 4}],
+                 "end": {"reason": "stopped", "cycle": 129}}
+        ev = lcnc_trace.Trace("G17 G21 M3 S800 F300\nG0 X0 Y0 Z10\nG81 X10 Z-10 R2\nG80 M2\n", rows, agent,
+                              self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"][-1], "cutting")
+        self.assertIn({"t_us": 8000, "kind": "signal", "name": "SPL", "value": 1}, ev)
 
     def test_a_stalled_spindle_started_stays_at_zero_speed(self):
         # T2 (g84/spindle_never_at_speed): stalled from the start, M3 turns nothing: ZSP stays 1
@@ -473,6 +499,41 @@ class Leads(unittest.TestCase):
         a, runs = self.adapter([1000])
         a.run()
         self.assertEqual(len(runs), 1)
+
+
+class Delivery(unittest.TestCase):
+    def test_the_trace_is_the_last_run_whole(self):
+        # I1 (cycles/g81_feed_hold): the first run with the feed hold held at Z -3.085, the run
+        # with the cycle start too at Z -3.07 (the hold taken 3 ms earlier); the harness reads
+        # the last run only, not the first run's events up to the stop and the last one's after
+        def sample(t, z):
+            return {"t_us": t, "kind": "sample", "axes": {"Z": lcnc_trace.Raw(lcnc_trace.dec(z, 6))}}
+
+        def events(z_held, resumed):
+            ev = [sample(0, 0.0), sample(1000, z_held), {"t_us": 1000, "kind": "signal", "name": "SPL", "value": 1},
+                  sample(2000, z_held)]
+            if resumed:
+                ev += [{"t_us": 2000, "kind": "input", "name": "cycle_start", "value": ""}, sample(3000, -10.0)]
+            return ev + [{"t_us": 3000, "kind": "end", "reason": "program_end"}]
+
+        a = lcnc_adapter.Adapter(Leads.Args())
+        a.sc = lcnc_adapter.Scenario({}, {"period_us": 1000})
+        runs = iter([events(-3.085, False), events(-3.07, True)])
+        a.run = lambda: {"events": next(runs)}
+        stop = {"signal": "SPL", "value": 1}
+        got = []
+        ans = a.advance({"until_us": 10000, "stop_on": [stop]})
+        self.assertEqual((ans["stopped_on"], ans["now_us"]), (0, 1000))
+        got += json.loads(a.read({}))["events"]
+        a.input({"t_us": 2000, "input": {"name": "cycle_start"}})
+        while True:
+            ans = a.advance({"until_us": 10000, "stop_on": []})
+            got += json.loads(a.read({}))["events"]
+            if ans["ended"]:
+                break
+        zs = [e["axes"]["Z"] for e in got if e["kind"] == "sample"]
+        self.assertEqual(zs, [0, -3.07, -3.07, -10])
+        self.assertEqual(got[-1]["kind"], "end")
 
 
 class Conditions(unittest.TestCase):
