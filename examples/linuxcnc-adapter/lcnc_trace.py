@@ -617,8 +617,13 @@ class Trace:
                 self.set_phase(t, "positioning")
             return
         dwell_p = self.prog.p.get(self.cur, 0.0)
-        if not moving and (getattr(self, "pause_pending", False) or self.levels["SPL"]):
-            return  # a feed hold's standstill is not the hole's bottom
+        if moving:
+            self.hold_still = False
+        elif getattr(self, "pause_pending", False) or self.levels["SPL"] or getattr(self, "hold_still", False):
+            # a feed hold's standstill, until motion goes on after the cycle start, is not the
+            # hole's bottom
+            self.hold_still = True
+            return
         if ph in ("positioning", "retract") and moving and mtype == MOTION_FEED and d < 0:
             self.set_phase(t, "cutting")
         elif ph == "retract" and moving and abs(d) < 1e-9 and kind.startswith("cycle"):

@@ -356,10 +356,19 @@ class Recording(unittest.TestCase):
                  "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
                             {"cycle": 115, "interp": 3, "paused": True, "task": 4}],
                  "end": {"reason": "stopped", "cycle": 129}}
-        ev = lcnc_trace.Trace("G17 G21 M3 S800 F300\nG0 X0 Y0 Z10\nG81 X10 Z-10 R2\nG80 M2\n", rows, agent,
-                              self.CFG, 1000).build()
+        prog = "G17 G21 M3 S800 F300\nG0 X0 Y0 Z10\nG81 X10 Z-10 R2\nG80 M2\n"
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
         self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"][-1], "cutting")
         self.assertIn({"t_us": 8000, "kind": "signal", "name": "SPL", "value": 1}, ev)
+        # the cycle start taken at 126, the feed goes on from 128: cutting throughout
+        rows += [row(130 + k, z=1.93 - 0.01 * (k - 1) if k > 1 else 1.93, rpm=800, cmd=800, on=1, fwd=1, line=3,
+                     mtype=2) for k in range(6)]
+        agent = dict(agent, given=agent["given"] + [{"cycle": 126, "sent": 125, "due": 126,
+                                                     "input": {"name": "cycle_start"}}],
+                     states=agent["states"] + [{"cycle": 127, "interp": 2, "paused": False, "task": 4}],
+                     end={"reason": "time_limit", "cycle": 135, "limit_cycles": 25})
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"], ["positioning", "cutting"])
 
     def test_a_stalled_spindle_started_stays_at_zero_speed(self):
         # T2 (g84/spindle_never_at_speed): stalled from the start, M3 turns nothing: ZSP stays 1
