@@ -197,6 +197,11 @@ class Adapter:
         if "not_applicable" in res:
             return res
         if res["end"]["reason"] == "over_budget":
+            if self.args.keep:  # the agent's log says why (its task states)
+                os.makedirs(self.args.keep, exist_ok=True)
+                with open(os.path.join(self.args.keep, f"run{self.serial:04d}.over_budget.agent.json"), "w") as f:
+                    json.dump(res, f)
+                self.serial += 1
             return {"not_applicable": f"LinuxCNC's run went past the adapter's budget of {self.args.max_run_s:g} s "
                                       f"of machine time (--max-run-s) before the scenario's own end"}
         rows = lcnc_trace.read_rows(out, sc.cfg["period_us"])
@@ -252,6 +257,11 @@ class Adapter:
                     if e["t_us"] > t_cut or (e["t_us"] == t_cut and e["kind"] != "sample"
                                              and lcnc_trace.dumps(e) not in delivered):
                         keep.append(e)
+                if not any(e["kind"] == "end" for e in keep):
+                    # the new run ended before the time already delivered (its start moved): its
+                    # end closes the run there, not never (the harness would wait to its limit)
+                    ends = [dict(e, t_us=max(e["t_us"], t_cut)) for e in new if e["kind"] == "end"]
+                    keep += ends[-1:]
                 sc.events = sc.events[:sc.pos] + keep
             else:
                 sc.events = new

@@ -239,14 +239,11 @@ class Run:
         self.clock = clock
         self.cfg = req["cfg"]
         self.period_us = self.cfg["period_us"]
-        self.per_ms = 1000.0 / self.period_us
         self.msgs = []
         self.states = []
         self.given = []
         self.single_block = False
         self.step_taken = None
-        self.step_line = None  # the task's line when the step was given
-        self.step_done_since = None
         self.commanders = COMMANDERS
 
     def snapshot(self):
@@ -272,7 +269,6 @@ class Run:
         elif name == "cycle_start":
             if self.held() or s.task_paused:
                 cmd = ("auto", linuxcnc.AUTO_STEP if self.single_block else linuxcnc.AUTO_RESUME)
-                self.step_line = s.current_line
         elif name == "reset":
             cmd = ("abort",)
         elif name == "single_block":
@@ -331,26 +327,14 @@ class Run:
 
     def held(self):
         """The program stands held (the SPL lamp): paused by feed hold or M0/M1 (the interpreter
-        paused, as halui's program.is-paused), or a single-block step done. LinuxCNC's step runs
-        the canonical commands of the next line and waits before the first command of the line
-        after it (emctaskmain.cc STEPPING_CHECK), its task paused throughout; inside a line (a
-        G84's reversal) the task also waits with motion's queue empty. So a step is done once
-        the task has gone on to another line, nothing is queued or moving and its command is
-        done, for 5 ms on end (a line's next command comes within a task cycle or two)."""
+        paused, as halui's program.is-paused), or a single-block step done: after a step is
+        taken, once LinuxCNC's task is paused again with nothing left in motion's queue."""
         now = self.clock.now()
         if self.step_taken is not None:
-            done = (now >= self.step_taken + 2 and s.task_paused and s.queue == 0 and s.inpos
-                    and s.exec_state == linuxcnc.EXEC_DONE
-                    and (s.current_line != self.step_line or now - self.step_taken > 1000 * self.per_ms))
-            if not done:
-                self.step_done_since = None
-                return False
-            self.step_done_since = self.step_done_since if self.step_done_since is not None else now
-            if now - self.step_done_since < 5 * self.per_ms:
-                return False
-            self.step_taken = None
-            self.step_done_since = None
-            return True
+            if now >= self.step_taken + 2 and s.task_paused and s.queue == 0 and s.inpos:
+                self.step_taken = None
+                return True
+            return False
         return held()
 
     def run(self):
@@ -377,15 +361,7 @@ class Run:
             if why:
                 return self.finish(out, sampler, {"not_applicable": why})
         if self.single_block:
-            # LinuxCNC's first step from idle opens the program paused (emctaskmain.cc: a run
-            # then a pause); its next step runs line 1. The reference's single block runs the
-            # first block at the start: both are given here, the second taken as a step.
-            s.poll()
-            self.step_line = s.current_line
             c.auto(linuxcnc.AUTO_STEP)
-            c.wait_complete()
-            c.auto(linuxcnc.AUTO_STEP)
-            self.step_taken = clock.now()
         else:
             c.auto(linuxcnc.AUTO_RUN, 0)
         wall0 = time.monotonic()

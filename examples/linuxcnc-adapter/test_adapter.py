@@ -417,63 +417,6 @@ class Recording(unittest.TestCase):
         self.assertEqual(lcnc_trace.alarm_code("Spindle not turning in g88"), "NC-1095")
 
 
-def agent_module():
-    """lcnc_agent with stand-ins for LinuxCNC's `hal` and `linuxcnc` modules (its logic only)."""
-    import importlib
-    import types
-
-    class Stat:
-        def poll(self):
-            pass
-
-    fake = types.ModuleType("linuxcnc")
-    fake.command = lambda: None
-    fake.stat = Stat
-    fake.error_channel = lambda: None
-    fake.EXEC_DONE, fake.EXEC_WAITING_FOR_MOTION = 2, 3
-    fake.INTERP_IDLE, fake.INTERP_READING, fake.INTERP_PAUSED = 1, 2, 3
-    saved = {k: sys.modules.get(k) for k in ("hal", "linuxcnc", "lcnc_agent")}
-    sys.modules["hal"] = types.ModuleType("hal")
-    sys.modules["linuxcnc"] = fake
-    sys.modules.pop("lcnc_agent", None)
-    try:
-        return importlib.import_module("lcnc_agent")
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                sys.modules.pop(k, None)
-            else:
-                sys.modules[k] = v
-
-
-class SingleBlock(unittest.TestCase):
-    def test_a_step_is_done_once_the_task_waits_at_the_next_line(self):
-        # I4: LinuxCNC's task stays paused through a step and waits with an empty queue inside a
-        # line too (a G84's spindle reversal): the step of line 3 is done once the task has gone
-        # on to line 3 and stands with its command done for 5 ms, not at the reversal's wait
-        agent = agent_module()
-        st = agent.s
-        now = [100]
-        run = agent.Run.__new__(agent.Run)
-        run.clock = type("C", (), {"now": lambda self: now[0]})()
-        run.per_ms = 1.0
-        run.step_taken, run.step_line, run.step_done_since = 100, 2, None
-        seen = []
-        # (cycle, current line, queue, in position, exec state): the step is taken at 100
-        timeline = [(c, 2, 0, 1, 2) for c in range(100, 104)]  # line 3 not reached yet
-        timeline += [(c, 3, 1, 0, 3) for c in range(104, 120)]  # line 3's feed in
-        timeline += [(c, 3, 0, 1, 3) for c in range(120, 130)]  # the reversal: waiting for motion
-        timeline += [(c, 3, 1, 0, 3) for c in range(130, 150)]  # the feed out
-        timeline += [(c, 3, 0, 1, 2) for c in range(150, 160)]  # done, waiting for the next step
-        for c, line, queue, inpos, ex in timeline:
-            now[0] = c
-            st.task_paused, st.current_line, st.queue, st.inpos, st.exec_state = 1, line, queue, inpos, ex
-            if run.held():
-                seen.append(c)
-                break
-        self.assertEqual(seen, [155])
-
-
 class Leads(unittest.TestCase):
     class Args:
         log = None
