@@ -20,10 +20,12 @@ The mapping (examples/linuxcnc-adapter/README.md says it for users):
   end is M3/M4; S with the first start and every change of the programmed speed; M2/M30 at the
   program end; M8/M7/M9 from the coolant pins. Each function has its strobe and FIN at the same
   µs: LinuxCNC has no completion handshake (the dialect's `plc.fin_ms` = 0).
-- **signals**: STL (program running, not paused), SPL (paused: feed hold, single-block step, M0),
+- **signals**: STL (program running, not paused), SPL (paused: feed hold, single-block step, M0;
+  raised where the hold took effect: the standstill that lasts until the program goes on, DEC-154),
   ZSP (spindle standing for `plc.zsp_ms`, falling when it turns: a stalled spindle started stays
   at zero speed), ESP (LinuxCNC's E-stop state).
-- **blocks**: a line starts when its motion starts (`motion.program-line`), or with the first
+- **blocks**: a line starts when its motion starts (`motion.program-line`, read with the positions
+  of the servo cycle it belongs to: `LAGGING`; a subroutine's body after its call), or with the first
   spindle/coolant change it makes; lines without an observable action start with the next one
   that has it.
 - **phases** (in cycles only, as the reference): from the cycle's line, motion type and the tool
