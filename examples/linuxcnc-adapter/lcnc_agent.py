@@ -92,13 +92,25 @@ def machine_on(msgs, clock):
 
 
 # Blocks that bring the machine back to the dialect's power-on state between runs (modal codes
-# as the reference's power-on, offsets cleared, spindle and coolant off, at machine zero).
+# as the reference's power-on, offsets cleared, spindle and coolant off, at machine zero). What a
+# program leaves in the kept LinuxCNC and its reset/abort does not clear:
+# - the overrides' enables: G74/G84 disable feed and spindle override and enable them again after
+#   the cycle only when motion reported them enabled as the interpreter read the line
+#   (interp_cycles.cc `convert_cycle_g74_g84`, GET_EXTERNAL_FEED_OVERRIDE_ENABLE), and an abort
+#   inside the cycle or a program's M49 leaves them off: M48 turns both on;
+# - a canned cycle's dwell P: the interpreter keeps the last cycle's P (`settings->cycle_p`) for the
+#   next cycle without P, across programs (its init() does not clear it): a G84 after a G88 P0.3
+#   dwelt 0.3 s at the bottom. A cycle with P0 that moves nothing (at machine zero, R = Z = 0) sets
+#   it back to the power-on 0.
 POWER_ON_MDI = [
     "G92.1",
     "G10 L2 P1 X0 Y0 Z0",
     "G17 G21 G40 G49 G54 G80 G90 G94 G99 G8 {path_mode} M5 M9",
-    "F0 S0",
+    "M48",
     "G53 G0 X0 Y0 Z0",
+    "G90 G98 G82 X0 Y0 Z0 R0 P0 F1",
+    "G80 G99",
+    "F0 S0",
 ]
 
 
@@ -120,6 +132,9 @@ def prepare(msgs, clock, path_mode="G64"):
         wait(lambda: s.interp_state == linuxcnc.INTERP_IDLE, 30, "MDI " + line, msgs, clock)
     c.feedrate(1.0)
     c.spindleoverride(1.0, 0)
+    s.poll()
+    if not (s.feed_override_enabled and s.spindle[0]["override_enabled"]):
+        raise RuntimeError("the overrides are still disabled after M48")
     c.set_optional_stop(0)
     c.set_block_delete(0)
     wait(lambda: s.inpos and abs(hal.get_value("spindle-speed-limited")) < 1e-9, 30, "machine at rest")
@@ -360,8 +375,12 @@ class Run:
         started = False
         held_since = None
         reset_at = None
+        last_pos, moved_at = None, c_run
         while end is None:
             now = clock.now()
+            pos = (hal.get_value("Xpos"), hal.get_value("Ypos"), hal.get_value("Zpos"))
+            if pos != last_pos:
+                last_pos, moved_at = pos, now
             st = self.state()
             if st != last:
                 self.states.append({"cycle": now, "interp": st[0], "paused": st[1], "task": st[2], "exec": st[3],
@@ -407,7 +426,9 @@ class Run:
                         self.give({"name": "cycle_start"}, now)
                         self.given[-1]["auto"] = True
                 elif not pending:
-                    held_since = held_since if held_since is not None else now
+                    # held for hold_ms with the axes standing: a pause LinuxCNC defers (inside
+                    # a synchronised move) has taken effect by then
+                    held_since = max(held_since if held_since is not None else now, moved_at)
                     if now - held_since > req.get("hold_ms", 500) * per_ms:
                         end = {"reason": "stopped", "cycle": now}
                 else:

@@ -264,9 +264,21 @@ addf sampler.0 servo-thread
 
 
 def running_linuxcnc():
-    """Process ids of a LinuxCNC already running on this machine (any user's)."""
+    """Process ids of a LinuxCNC already running on this machine (any user's). Exited processes
+    not yet reaped by their parent (zombies: another user's LinuxCNC just shut down) hold nothing
+    and are not counted: waiting for them failed scenarios with "another LinuxCNC is still
+    running" after another engineer's run."""
     out = subprocess.run(["pgrep", "-f", "rtapi_app|milltask|linuxcncsvr"], capture_output=True, text=True)
-    return [int(p) for p in out.stdout.split()]
+    return [int(p) for p in out.stdout.split() if not zombie(int(p))]
+
+
+def zombie(pid):
+    """The process has exited (state Z or X in /proc/PID/stat) or is gone."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] in ("Z", "X")
+    except (OSError, IndexError):
+        return True
 
 
 def log(*a):

@@ -20,10 +20,12 @@ The mapping (examples/linuxcnc-adapter/README.md says it for users):
   end is M3/M4; S with the first start and every change of the programmed speed; M2/M30 at the
   program end; M8/M7/M9 from the coolant pins. Each function has its strobe and FIN at the same
   µs: LinuxCNC has no completion handshake (the dialect's `plc.fin_ms` = 0).
-- **signals**: STL (program running, not paused), SPL (paused: feed hold, single-block step, M0),
-  ZSP (spindle standing for `plc.zsp_ms`, falling with a start command or motion), ESP (LinuxCNC's
-  E-stop state).
-- **blocks**: a line starts when its motion starts (`motion.program-line`), or with the first
+- **signals**: STL (program running, not paused), SPL (paused: feed hold, single-block step, M0;
+  raised where the hold took effect: the standstill that lasts until the program goes on, DEC-154),
+  ZSP (spindle standing for `plc.zsp_ms`, falling when it turns: a stalled spindle started stays
+  at zero speed), ESP (LinuxCNC's E-stop state).
+- **blocks**: a line starts when its motion starts (`motion.program-line`, read with the positions
+  of the servo cycle it belongs to: `LAGGING`; a subroutine's body after its call), or with the first
   spindle/coolant change it makes; lines without an observable action start with the next one
   that has it.
 - **phases** (in cycles only, as the reference): from the cycle's line, motion type and the tool
@@ -73,8 +75,17 @@ def dumps(obj):
     return json.dumps(obj, ensure_ascii=False)
 
 
+# Motion's pins written from its status of the servo cycle before: its controller writes the HAL
+# (control.c `output_to_hal`: motion.program-line = emcmotStatus->id, motion.motion-type =
+# emcmotStatus->motionType) before it takes the planner's status of this cycle (`update_status`),
+# while the joints' positions written there are this cycle's. A new line or motion type shows one
+# servo period after its first position change.
+LAGGING = ("line", "mtype")
+
+
 def read_rows(path, period_us):
-    """The recording as rows of numbers keyed by servo cycle (from the clock column)."""
+    """The recording as rows of numbers keyed by servo cycle (from the clock column), motion's
+    line and motion type moved back to the cycle of the positions they belong to (`LAGGING`)."""
     rows = []
     with open(path) as f:
         for line in f:
@@ -84,6 +95,10 @@ def read_rows(path, period_us):
             r = dict(zip(COLUMNS, (float(x) for x in v)))
             r["cycle"] = int(round(r["clock"] * 1e6 / period_us))
             rows.append(r)
+    for a, b in zip(rows, rows[1:]):
+        if b["cycle"] == a["cycle"] + 1:
+            for k in LAGGING:
+                a[k] = b[k]
     return rows
 
 
@@ -109,6 +124,7 @@ def alarm_code(text):
 # ---- the program text: which lines are cycles and what they carry ----
 
 WORD = re.compile(r"([A-Za-z])\s*([-+]?\d*\.?\d+)")
+OWORD = re.compile(r"^\s*(?:/\s*)?(?:[Nn]\d+\s*)?[Oo]\s*(\d+|<[^>]*>)\s*(sub|endsub|call)\b", re.I)
 
 
 def words(line):
@@ -161,6 +177,25 @@ class Program:
         t = self.text(line)
         return bool(t) and not t.startswith(("(", ";", "%"))
 
+    def call_of(self, line, after):
+        """When `line` is inside an o-word subroutine's body: the first line at or after `after`
+        that calls that subroutine (its body runs when the call is executed, LinuxCNC's motion
+        then names the body's line), else None."""
+        name = None
+        for i in range(1, min(line, len(self.lines)) + 1):
+            m = OWORD.match(self.lines[i - 1])
+            if m and m.group(2).lower() == "sub":
+                name = m.group(1).lower()
+            elif m and m.group(2).lower() == "endsub" and i < line:
+                name = None
+        if name is None:
+            return None
+        for i in range(max(after, 1), len(self.lines) + 1):
+            m = OWORD.match(self.lines[i - 1])
+            if m and m.group(1).lower() == name and m.group(2).lower() == "call":
+                return i
+        return None
+
 
 def tool_axis(plane):
     return {17: "Z", 18: "Y", 19: "X"}[plane]
@@ -186,6 +221,12 @@ class Trace:
         self.blocks = 0
         self.alarms = 0
         self.stopped_by = None
+        self.hold_at = None
+        # the first servo cycle a reset or E-stop was sent: motion aborts from about there (its
+        # stop is the abort's, not a phase of the cycle nor a feed hold taking effect)
+        self.abort_sent = min((g["sent"] for g in agent.get("given", []) if "sent" in g
+                               and g["input"]["name"] in ("reset", "emergency_stop") and g["input"].get("on", True)),
+                              default=None)
 
     def acted(self):
         """A reset or E-stop acts before LinuxCNC's task reports it taken (its echo comes once the
@@ -199,6 +240,7 @@ class Trace:
             for r in self.rows:
                 if g["sent"] < r["cycle"] <= g["cycle"] and prev is not None and prev["on"] and not r["on"]:
                     g["cycle"] = r["cycle"]
+                    g["acted"] = True
                     break
                 prev = r
 
@@ -303,9 +345,10 @@ class Trace:
                 st = states.pop(0)
                 if st["interp"] != 1 or st["paused"]:
                     if st["paused"]:
-                        # paused from here; SPL once the axes are at rest (below), as the
-                        # reference reports a hold where it took effect
+                        # paused from here; SPL where the hold took effect (below), as the
+                        # reference reports a hold
                         self.pause_pending = True
+                        self.hold_at = self.hold_effect(st["cycle"], end_c)
                     else:
                         self.pause_pending = False
                         self.signal(t, "SPL", 0)
@@ -325,9 +368,7 @@ class Trace:
                     line = ie["line"]
                 self.alarm(t, alarm_code(m["text"]), m["text"].strip(), line)
             self.row(prev, r, t)
-            # (not while a synchronised move waits for its index: LinuxCNC defers the pause)
-            if (getattr(self, "pause_pending", False) and not r["index"]
-                    and not any(abs(r[a] - prev[a]) > 1e-9 for a in "XYZ")):
+            if getattr(self, "pause_pending", False) and self.hold_at is not None and c >= self.hold_at:
                 self.pause_pending = False
                 self.signal(t, "SPL", 1)
                 self.signal(t, "STL", 0)
@@ -355,6 +396,44 @@ class Trace:
         self.emit(t, o)
         self.alarms += 1
 
+    def standstill_from(self, upto):
+        """The first servo cycle of the standstill that lasts up to cycle `upto` (the first row in
+        which no axis moved from the row before, as every row after it up to `upto`), or None
+        when the axes moved into `upto`."""
+        cycles = sorted(c for c in self.by_cycle if c <= upto)
+        if not cycles or cycles[-1] != upto:
+            return None
+        since = None
+        for a, b in zip(reversed(cycles[:-1]), reversed(cycles)):
+            ra, rb = self.by_cycle[a], self.by_cycle[b]
+            if any(abs(rb[k] - ra[k]) > 1e-9 for k in "XYZ"):
+                break
+            since = b
+        return since
+
+    def hold_effect(self, paused, end_c):
+        """The servo cycle a pause reported at cycle `paused` took effect: where the axes came to
+        the standstill that lasts until the program went on (the task left its paused state or a
+        cycle start was taken) or the run's end; None when motion never held (it still moved when
+        the program went on). LinuxCNC defers a pause inside a spindle-synchronised move (G33,
+        G33.1, G76's passes run to their end: tp.c `tpGetFeedScale` pauses TC_SYNC_NONE and
+        velocity-synchronised segments only) and while a move waits for at-speed or the index;
+        the axes standing still in those waits is not yet the hold."""
+        ends = [st["cycle"] for st in self.agent.get("states", []) if st["cycle"] > paused and not st["paused"]]
+        ends += [g["cycle"] for g in self.agent.get("given", [])
+                 if g["input"]["name"] == "cycle_start" and g["cycle"] is not None and g["cycle"] > paused]
+        if self.abort_sent is not None:
+            ends.append(self.abort_sent)
+        resume = min(ends + [end_c])
+        # the last row the machine stood in before it went on
+        upto = max((c for c in self.by_cycle if c <= resume), default=None)
+        if upto is None:
+            return None
+        since = self.standstill_from(upto)
+        if since is None:
+            return None
+        return max(since, paused)
+
     def end_cycle(self, rows):
         """The cycle the run ends at and its reason: a reset or E-stop where it acted, a time limit
         where it falls, else once nothing changes any more (the spindle stopped and ZSP reported)."""
@@ -368,9 +447,12 @@ class Trace:
                 return end["cycle"], reason
             return self.t0 + end["limit_cycles"], reason
         if reason == "stopped":
-            # held with nothing to release it: the run ends where the hold began
+            # held with nothing to release it: the run ends where the hold took effect
             holds = [st["cycle"] for st in self.agent.get("states", []) if st["paused"]]
-            return (max(holds[-1], self.t0) if holds else end["cycle"]), reason
+            if not holds:
+                return end["cycle"], reason
+            at = self.hold_effect(holds[-1], end["cycle"])
+            return max(at if at is not None else holds[-1], self.t0), reason
         if end.get("estop"):
             es = [g["cycle"] for g in self.agent.get("given", [])
                   if g["input"]["name"] == "emergency_stop" and g["input"].get("on")]
@@ -426,7 +508,8 @@ class Trace:
                     self.function(t, "M", 3 if sr > 0 else 4)
             else:
                 self.spindle_change(t, sp, sr)
-            if sr != 0 and sp == 0:
+            if sr != 0 and sp == 0 and abs(r["rpm"]) >= 1e-9:
+                # started and turning; a stalled spindle (T2) stays at zero speed
                 self.signal(t, "ZSP", 0)
         for pin, on_code in (("flood", 8), ("mist", 7)):
             if p[pin] != r[pin]:
@@ -468,7 +551,13 @@ class Trace:
         if self.cur is not None and self.prog.kind.get(self.cur):
             self.leave_cycle(t)
         self.cur = line
-        if line >= self.next_block:
+        call = self.prog.call_of(line, self.next_block) if line >= self.next_block else None
+        if call is not None:
+            # a subroutine's body defined before its call: its lines were read (the reference
+            # lists them as read), the call ran, then the body's line that LinuxCNC's motion
+            # names (X2)
+            self.block(t, call)
+        elif line >= self.next_block:
             self.block(t, line)
         else:  # a line run again (an o-word loop or subroutine)
             self.next_block, saved = line, self.next_block
@@ -498,7 +587,7 @@ class Trace:
             self.emit(t, {"kind": "phase", "name": name})
 
     def phases(self, p, r, t, kind):
-        if not kind:
+        if not kind or (self.abort_sent is not None and r["cycle"] >= self.abort_sent):
             return
         ta = tool_axis(self.prog.plane.get(self.cur, 17))
         d = r[ta] - p[ta]
@@ -518,12 +607,25 @@ class Trace:
         if kind == "g76":
             if mtype == MOTION_FEED and moving and ph != "cutting":
                 self.set_phase(t, "cutting")
-            elif ph == "cutting" and mtype == MOTION_TRAVERSE and moving:
+                self.cut_from = r["Z"]
+            elif ph == "cutting" and abs(r["X"] - p["X"]) > 1e-9 and (
+                    mtype == MOTION_TRAVERSE or abs(r["Z"] - p["Z"]) < 1e-9) and (
+                    abs(r["Z"] - getattr(self, "cut_from", r["Z"])) > 1e-6):
+                # the rapid out begins with X once the pass has cut along Z: the pass's last
+                # servo period may already show the traverse's type while only Z ends its cut
+                # (a feed hold stops there), its first ones the feed's while X ends the infeed
                 self.set_phase(t, "retract")
             elif ph == "retract" and moving and abs(r["Z"] - p["Z"]) > 1e-9 and abs(r["X"] - p["X"]) < 1e-9:
                 self.set_phase(t, "positioning")
             return
         dwell_p = self.prog.p.get(self.cur, 0.0)
+        if moving:
+            self.hold_still = False
+        elif getattr(self, "pause_pending", False) or self.levels["SPL"] or getattr(self, "hold_still", False):
+            # a feed hold's standstill, until motion goes on after the cycle start, is not the
+            # hole's bottom
+            self.hold_still = True
+            return
         if ph in ("positioning", "retract") and moving and mtype == MOTION_FEED and d < 0:
             self.set_phase(t, "cutting")
         elif ph == "retract" and moving and abs(d) < 1e-9 and kind.startswith("cycle"):
@@ -549,7 +651,7 @@ class Trace:
     def finish_program(self, end_c, reason):
         """At the end: the cycle left, the program end's block and M2/M30 when LinuxCNC reached it."""
         t = self.t(end_c)
-        if getattr(self, "pause_pending", False):
+        if getattr(self, "pause_pending", False) and self.hold_at is not None and self.hold_at <= end_c:
             self.pause_pending = False
             self.signal(t, "SPL", 1)
             self.signal(t, "STL", 0)

@@ -10,7 +10,9 @@ harness/tests/linuxcnc_adapter.rs, or `NC_CONFORM=target/debug/nc-conform python
 - the stop conditions of `advance` over trace events, an axis crossing at its interpolated µs.
 """
 
+import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -89,6 +91,23 @@ class MachineConfig(unittest.TestCase):
         self.assertIn("G61.1", exact)
         self.assertNotIn("ARC_BLEND_OPTIMIZATION_DEPTH", ini)
 
+    def test_an_exited_linuxcnc_not_yet_reaped_is_not_running(self):
+        # another engineer's LinuxCNC left zombies for minutes; they hold nothing
+        import time
+
+        pid = os.fork()
+        if pid == 0:
+            os._exit(0)
+        try:
+            for _ in range(100):
+                if lcnc_machine.zombie(pid):
+                    break
+                time.sleep(0.01)
+            self.assertTrue(lcnc_machine.zombie(pid))
+            self.assertFalse(lcnc_machine.zombie(os.getpid()))
+        finally:
+            os.waitpid(pid, 0)
+
     def test_what_linuxcnc_cannot_have_is_not_applicable(self):
         for params, says in [
             ([{"id": "nc.rapid_mm_min", "axis": "Z", "value": 3000}], "slowest axis gives 3000"),
@@ -105,6 +124,49 @@ def row(cycle, z=0.0, rpm=0.0, revs=0.0, cmd=0.0, on=0, fwd=0, rev=0, line=0, mt
     return {"n": cycle, "X": 0.0, "Y": 0.0, "Z": z, "rpm": rpm, "revs": revs, "speed_cmd": cmd,
             "clock": cycle / 1000.0, "on": on, "fwd": fwd, "rev": rev, "at_speed": 0, "index": index,
             "inpos": 1, "flood": 0, "mist": 0, "line": line, "mtype": mtype, "cycle": cycle}
+
+
+def power_on_mdi():
+    """The agent's power-on blocks (lcnc_agent.POWER_ON_MDI), read from its source: the agent
+    imports LinuxCNC's own modules."""
+    import ast
+
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "lcnc_agent.py")) as f:
+        src = f.read()
+    for node in ast.parse(src).body:
+        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "POWER_ON_MDI":
+            return [line.format(path_mode="G61.1") for line in ast.literal_eval(node.value)]
+    raise AssertionError("no POWER_ON_MDI in lcnc_agent.py")
+
+
+class PowerOn(unittest.TestCase):
+    # A program before (a G88 with P0.3, M49) and, after the power-on blocks, a G84 without P.
+    BEFORE = ["G21 G17 M3 S500 F200", "G0 X0 Y0 Z10", "G88 X5 Z-5 R2 P0.3", "G80", "M49"]
+    AFTER = ["M3 S600 F600", "G0 Z5", "G84 Z-3 R2", "M2"]
+
+    def test_power_on_clears_what_a_program_leaves_in_the_interpreter(self):
+        # LinuxCNC keeps a canned cycle's P for the next cycle without P across programs, and a
+        # G84 enables the overrides again only when they were on as it was read (X3: a G84 dwelt
+        # 0.3 s at the bottom after cycles/g88). Oracle: LinuxCNC's own interpreter (rs274 -g).
+        blocks = power_on_mdi()
+        self.assertIn("M48", blocks)
+        rs274 = shutil.which("rs274")
+        if rs274 is None:  # without LinuxCNC: the blocks that do it are there
+            self.assertTrue(any(" P0 " in f" {b} " and "G82" in b and "R0" in b for b in blocks), blocks)
+            return
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "p.ngc")
+            with open(path, "w") as f:
+                f.write("\n".join(self.BEFORE + blocks + self.AFTER) + "\n")
+            out = subprocess.run([rs274, "-g", path], capture_output=True, text=True, timeout=60,
+                                 stdin=subprocess.DEVNULL).stdout
+        canon = [l.split("N..... ", 1)[1] for l in out.splitlines() if "N..... " in l]
+        g84 = canon[max(i for i, l in enumerate(canon) if l.startswith("STRAIGHT_TRAVERSE")):]
+        self.assertIn("DWELL(0.3000)", canon)  # the G88's
+        self.assertIn("DWELL(0.0000)", g84, g84)
+        self.assertNotIn("DWELL(0.3000)", g84, g84)
+        self.assertIn("ENABLE_FEED_OVERRIDE()", g84, g84)
+        self.assertIn("ENABLE_SPEED_OVERRIDE(0)", g84, g84)
 
 
 class Recording(unittest.TestCase):
@@ -167,6 +229,34 @@ class Recording(unittest.TestCase):
         # not at the paused report (cycle 114, 4 ms) but at cycle 117, the first without motion
         self.assertEqual(spl, [7000])
 
+    def test_a_pause_in_a_synchronised_move_is_reported_where_motion_holds(self):
+        # I1: feed hold during a G33.1 at cycle 117: LinuxCNC runs the tap to its end (tp.c pauses
+        # unsynchronised segments only); the tap stands still at its reversal (121-123) and holds
+        # once back at the start (from 129); the cycle start is taken at 140
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(c, rpm=30, cmd=500, on=1, fwd=1) for c in range(110, 115)]
+        z = [5 - 0.1 * k for k in range(6)] + [4.5] * 3 + [4.5 + 0.1 * k for k in range(1, 6)] + [5.0] * 16
+        rows += [row(115 + k, z=v, rpm=30, cmd=500, on=1, fwd=1, line=3) for k, v in enumerate(z)]
+        agent = {"c_run": 105, "messages": [],
+                 "given": [{"cycle": 117, "sent": 116, "due": 117, "input": {"name": "feed_hold"}},
+                           {"cycle": 140, "sent": 139, "due": 140, "input": {"name": "cycle_start"}}],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 117, "interp": 3, "paused": True, "task": 4},
+                            {"cycle": 141, "interp": 2, "paused": False, "task": 4}],
+                 "end": {"reason": "time_limit", "cycle": 144, "settled": 144}}
+        ev = lcnc_trace.Trace("G21 M3 S500\nG0 X0 Z5\nG33.1 Z-1 K1\nG0 Z20\nM2\n", rows, agent, self.CFG,
+                              1000).build()
+        spl = [(e["t_us"], e["value"]) for e in ev if e["kind"] == "signal" and e["name"] == "SPL"]
+        # not at the reversal (121, 11 ms) but where the tap stands back at the start (129)
+        self.assertEqual(spl, [(19000, 1), (30000, 0)])
+        # a run held with nothing to release it ends where the hold took effect
+        agent = dict(agent, given=agent["given"][:1], states=agent["states"][:2],
+                     end={"reason": "stopped", "cycle": 144})
+        tr = lcnc_trace.Trace("G21 M3 S500\nG0 X0 Z5\nG33.1 Z-1 K1\nG0 Z20\nM2\n", rows, agent, self.CFG, 1000)
+        ev = tr.build()
+        self.assertEqual(ev[-1]["t_us"], 19000)
+        self.assertIn({"t_us": 19000, "kind": "signal", "name": "SPL", "value": 1}, ev)
+
     def test_the_line_before_an_armed_move_is_not_entered_again(self):
         ev = lcnc_trace.Trace(self.PROGRAM, self.rows_line_lagging(), self.AGENT, self.CFG, 1000).build()
         blocks = [e["line"] for e in ev if e["kind"] == "block"]
@@ -183,6 +273,138 @@ class Recording(unittest.TestCase):
                 r["line"] = 2
         return rows
 
+    def test_motions_line_and_type_are_read_with_the_positions_they_belong_to(self):
+        # Q1: motion writes motion.program-line and motion.motion-type from the cycle before
+        # (control.c output_to_hal before update_status): in the recording the G76's retract (a
+        # traverse, line 4) shows one period after X left 9.2, and the retract was stamped there
+        def rec(c, x, line, mtype):
+            r = row(c, line=line, mtype=mtype)
+            r["X"] = x
+            return " ".join(str(r[k]) for k in lcnc_trace.COLUMNS)
+
+        text = [rec(100, 9.2, 3, 2), rec(101, 9.2, 3, 2), rec(102, 9.201953, 3, 2), rec(103, 9.21, 4, 1),
+                rec(104, 9.23, 4, 1), "overrun", rec(106, 9.25, 4, 1)]
+        with tempfile.NamedTemporaryFile("w", suffix=".txt", delete=False) as f:
+            f.write("\n".join(text) + "\n")
+        try:
+            rows = lcnc_trace.read_rows(f.name, 1000)
+        finally:
+            os.unlink(f.name)
+        self.assertEqual([(r["cycle"], r["line"], r["mtype"]) for r in rows],
+                         [(100, 3, 2), (101, 3, 2), (102, 4, 1), (103, 4, 1), (104, 4, 1), (106, 4, 1)])
+
+    def test_a_subroutines_body_runs_after_its_call(self):
+        # X2 (lex/sub_while_arc_as_rs274): LinuxCNC's motion names the sub's body line (3) for
+        # the call's feed; the call (line 11) ran before it, the arc (line 12) comes 1.129 s later
+        prog = ("%\no100 sub\n  g1 x[#1] y[#2] f[#3 * 2]\no100 endsub\nN10 g17 g21 g90 g94\n/#<depth> = -2\n#5 = 3\n"
+                "o200 while [#5 GT 1]\n  #5 = [#5 - 1]\no200 endwhile\no100 call [10] [#5 * 5] [300]\n"
+                "G2 X20 Y5 I5 J0 (arc)\ng0 z[#<depth>]\nM2\n%\n")
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(110 + k, z=0.0, line=3, mtype=2) for k in range(5)]
+        for r in rows[-5:]:
+            r["X"] = 0.01 * (r["cycle"] - 109)
+        rows += [row(115 + k, line=12, mtype=2) for k in range(3)]
+        for r in rows[-3:]:
+            r["X"], r["Y"] = 10.0 + 0.01 * (r["cycle"] - 114), 5.0
+        agent = dict(self.AGENT, end={"reason": "program_end", "cycle": 117, "settled": 117})
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        blocks = {e["line"]: e["t_us"] for e in ev if e["kind"] == "block"}
+        self.assertEqual(blocks[11], 0)  # the call, with its feed
+        self.assertEqual(blocks[3], 0)
+        self.assertEqual(blocks[12], 5000)
+        self.assertEqual([e["line"] for e in ev if e["kind"] == "block"].count(3), 1)
+
+    def test_g76s_retract_begins_with_x(self):
+        # Q1 / I1: the pass's last servo period already shows the traverse's motion type while
+        # only Z ends its cut; the retract is where X leaves the thread's depth
+        prog = "G18 G21 M3 S600\nG0 X7 Z3\nG76 P1.5 Z-20 I-1 J0.5 K0.92\nM2\n"
+
+        def phases(x_at_115):
+            rows = [row(c) for c in range(100, 110)]
+            rows += [row(110 + k, z=3 - 0.1 * k, line=3, mtype=2) for k in range(5)]
+            rows += [row(115 + k, z=2.599, line=3, mtype=1) for k in range(10)]
+            for r in rows[10:]:
+                r["X"] = 5.5
+            for r in rows[15:]:
+                r["X"] += x_at_115 * (r["cycle"] - 114)
+            agent = dict(self.AGENT, end={"reason": "time_limit", "cycle": 124, "limit_cycles": 14})
+            ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+            return [(e["t_us"], e["name"]) for e in ev if e["kind"] == "phase"]
+
+        # held after the pass: X stands, the phase stays cutting
+        self.assertEqual(phases(0.0)[-1], (0, "cutting"))
+        # the rapid out: retract from the first period X moves
+        self.assertEqual(phases(0.0001)[-1], (5000, "retract"))
+        # the infeed's last period already shows the feed's type: the pass has not cut yet
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(110, line=3, mtype=2), row(111, line=3, mtype=2)] + [
+            row(112 + k, z=-0.1 * (k + 1), line=3, mtype=2) for k in range(5)]
+        for r, x in zip(rows[10:], [5.6, 5.5] + [5.5] * 5):
+            r["X"] = x
+        agent = dict(self.AGENT, end={"reason": "time_limit", "cycle": 116, "limit_cycles": 6})
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"], ["positioning", "cutting"])
+
+    def test_a_feed_hold_in_a_drilling_cycle_is_not_its_bottom(self):
+        # I1 (cycles/g81_feed_hold): held in the feed in, the drill stands; G81 (no dwell) goes to
+        # its retract only when it stands at the bottom, not in a hold
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(110 + k, z=2 - 0.01 * k, rpm=800, cmd=800, on=1, fwd=1, line=3, mtype=2) for k in range(8)]
+        rows += [row(118 + k, z=1.93, rpm=800, cmd=800, on=1, fwd=1, line=3, mtype=2) for k in range(12)]
+        agent = {"c_run": 105, "messages": [], "given": [{"cycle": 115, "sent": 114, "due": 115,
+                                                          "input": {"name": "feed_hold"}}],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 115, "interp": 3, "paused": True, "task": 4}],
+                 "end": {"reason": "stopped", "cycle": 129}}
+        prog = "G17 G21 M3 S800 F300\nG0 X0 Y0 Z10\nG81 X10 Z-10 R2\nG80 M2\n"
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"][-1], "cutting")
+        self.assertIn({"t_us": 8000, "kind": "signal", "name": "SPL", "value": 1}, ev)
+        # the cycle start taken at 126, the feed goes on from 128: cutting throughout
+        rows += [row(130 + k, z=1.93 - 0.01 * (k - 1) if k > 1 else 1.93, rpm=800, cmd=800, on=1, fwd=1, line=3,
+                     mtype=2) for k in range(6)]
+        agent = dict(agent, given=agent["given"] + [{"cycle": 126, "sent": 125, "due": 126,
+                                                     "input": {"name": "cycle_start"}}],
+                     states=agent["states"] + [{"cycle": 127, "interp": 2, "paused": False, "task": 4}],
+                     end={"reason": "time_limit", "cycle": 135, "limit_cycles": 25})
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"], ["positioning", "cutting"])
+
+    def test_a_stalled_spindle_started_stays_at_zero_speed(self):
+        # T2 (g84/spindle_never_at_speed): stalled from the start, M3 turns nothing: ZSP stays 1
+        # (the reference's drive); a spindle that turns drops it with its start
+        def zsp(rpm):
+            rows = [row(c) for c in range(100, 110)]
+            rows += [row(110 + k, z=0.1 * (k + 1), line=2, mtype=1) for k in range(5)]
+            rows += [row(115 + k, z=0.5, rpm=rpm, cmd=600, on=1, fwd=1, line=3) for k in range(20)]
+            agent = dict(self.AGENT, end={"reason": "time_limit", "cycle": 134, "limit_cycles": 24})
+            ev = lcnc_trace.Trace("G21\nG0 Z0.5\nM3 S600\nM2\n", rows, agent, self.CFG, 1000).build()
+            return [(e["t_us"], e["value"]) for e in ev if e["kind"] == "signal" and e["name"] == "ZSP"]
+
+        self.assertEqual(zsp(0.0), [(0, 1)])
+        self.assertEqual(zsp(6.0), [(0, 1), (5000, 0)])
+
+    def test_motion_stopping_after_a_reset_is_the_abort(self):
+        # I2 / I1 (cycles/g81_reset, g331/feed_hold_then_reset_mid_stroke): the reset is sent at
+        # 118 (a feed hold was pending since 112), motion stops at 121, the spindle goes off at
+        # 125 (where the reset is stamped): no retract phase, no hold taking effect
+        prog = "G17 G21 G98 M3 S800 F300\nG0 X0 Y0 Z10\nG81 X10 Z-10 R2\nG80 M2\n"
+        rows = [row(c) for c in range(100, 110)]
+        z = [2 - 0.005 * k for k in range(11)] + [1.95 - 0.002, 1.95 - 0.003] + [1.947] * 17
+        rows += [row(110 + k, z=v, rpm=800, cmd=800, on=1 if 110 + k < 125 else 0, fwd=1, line=3, mtype=2)
+                 for k, v in enumerate(z)]
+        agent = {"c_run": 105, "messages": [],
+                 "given": [{"cycle": 112, "sent": 111, "due": 112, "input": {"name": "feed_hold"}},
+                           {"cycle": 140, "sent": 118, "due": 119, "input": {"name": "reset"}}],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 112, "interp": 3, "paused": True, "task": 4},
+                            {"cycle": 139, "interp": 1, "paused": False, "task": 4}],
+                 "end": {"reason": "reset", "cycle": 140}}
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"][-1], "cutting")
+        self.assertFalse([e for e in ev if e["kind"] == "signal" and e["name"] == "SPL" and e["value"]])
+        self.assertEqual((ev[-1]["kind"], ev[-1]["t_us"]), ("end", 15000))
+
     def test_exact_decimals(self):
         for x, digits, want in [(0.000001, 6, "0.000001"), (-12.5, 6, "-12.5"), (50.0, 6, "50"),
                                 (-0.0000004, 6, "0"), (359.9996, 3, "360"), (2.999994, 6, "2.999994")]:
@@ -193,6 +415,77 @@ class Recording(unittest.TestCase):
         self.assertEqual(lcnc_trace.alarm_code("Cannot feed with zero feed rate"), "NC-1091")
         self.assertEqual(lcnc_trace.alarm_code("K word missing with g33/g33.1"), "NC-1096")
         self.assertEqual(lcnc_trace.alarm_code("Spindle not turning in g88"), "NC-1095")
+
+
+class Leads(unittest.TestCase):
+    class Args:
+        log = None
+        keep = None
+        max_run_s = 120
+
+    def adapter(self, lates):
+        """An adapter whose LinuxCNC runs answer with these input timings in turn (late_us)."""
+        a = lcnc_adapter.Adapter(self.Args())
+        a.sc = lcnc_adapter.Scenario({}, {"period_us": 1000})
+        runs = []
+
+        def run_once():
+            late = lates[len(runs)]
+            runs.append(dict(a.leads))
+            a.leads["reset"] = 24000  # the task took the reset 24 ms after it was sent
+            return {"events": [], "inputs": [{"input": "reset", "late_us": late}]}
+
+        a.run_once = run_once
+        return a, runs
+
+    def test_an_input_late_by_its_unknown_latency_is_given_again_earlier(self):
+        # I2: cycles/g81_reset's reset acted 24 ms after its time, the first reset of the session
+        a, runs = self.adapter([24000, 1000])
+        a.run()
+        self.assertEqual(runs, [{}, {"reset": 24000}])  # run again with the measured lead
+        # with the lead known, one run; on time, one run
+        a, runs = self.adapter([24000])
+        a.leads["reset"] = 20000
+        a.run()
+        self.assertEqual(len(runs), 1)
+        a, runs = self.adapter([1000])
+        a.run()
+        self.assertEqual(len(runs), 1)
+
+
+class Delivery(unittest.TestCase):
+    def test_the_trace_is_the_last_run_whole(self):
+        # I1 (cycles/g81_feed_hold): the first run with the feed hold held at Z -3.085, the run
+        # with the cycle start too at Z -3.07 (the hold taken 3 ms earlier); the harness reads
+        # the last run only, not the first run's events up to the stop and the last one's after
+        def sample(t, z):
+            return {"t_us": t, "kind": "sample", "axes": {"Z": lcnc_trace.Raw(lcnc_trace.dec(z, 6))}}
+
+        def events(z_held, resumed):
+            ev = [sample(0, 0.0), sample(1000, z_held), {"t_us": 1000, "kind": "signal", "name": "SPL", "value": 1},
+                  sample(2000, z_held)]
+            if resumed:
+                ev += [{"t_us": 2000, "kind": "input", "name": "cycle_start", "value": ""}, sample(3000, -10.0)]
+            return ev + [{"t_us": 3000, "kind": "end", "reason": "program_end"}]
+
+        a = lcnc_adapter.Adapter(Leads.Args())
+        a.sc = lcnc_adapter.Scenario({}, {"period_us": 1000})
+        runs = iter([events(-3.085, False), events(-3.07, True)])
+        a.run = lambda: {"events": next(runs)}
+        stop = {"signal": "SPL", "value": 1}
+        got = []
+        ans = a.advance({"until_us": 10000, "stop_on": [stop]})
+        self.assertEqual((ans["stopped_on"], ans["now_us"]), (0, 1000))
+        got += json.loads(a.read({}))["events"]
+        a.input({"t_us": 2000, "input": {"name": "cycle_start"}})
+        while True:
+            ans = a.advance({"until_us": 10000, "stop_on": []})
+            got += json.loads(a.read({}))["events"]
+            if ans["ended"]:
+                break
+        zs = [e["axes"]["Z"] for e in got if e["kind"] == "sample"]
+        self.assertEqual(zs, [0, -3.07, -3.07, -10])
+        self.assertEqual(got[-1]["kind"], "end")
 
 
 class Conditions(unittest.TestCase):

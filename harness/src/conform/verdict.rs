@@ -3,7 +3,7 @@
 //! [`crate::check`] (same tolerances as `nc-conform check`, the scenario's `.check.yaml` when it
 //! has one). Every failure names the rule id it breaks.
 
-use nc_engine::trace::{Event, Trace};
+use nc_engine::trace::{Event, Trace, AXES};
 use serde::Serialize;
 
 use super::drive::Driven;
@@ -225,7 +225,10 @@ pub fn judge(s: &Scenario, driven: &Driven, reference: &Trace, tolerances: &Tole
 /// of the reference's value at the same time replaced by the reference's: positions within
 /// `keypoint_mm`, the spindle speed within `speed_rpm`, its angle within [`ANGLE_MDEG`]; the end
 /// summary's positions, command positions and spindle against the reference's end summary.
-/// Values beyond the tolerance are kept as the controller reported them.
+/// Values beyond the tolerance are kept as the controller reported them. A position or speed the
+/// controller holds unchanged from one sample to the next keeps the value its first sample was
+/// read as: where the reference moves within the tolerance of a standing controller (it resumed
+/// a feed hold 20–35 ms earlier), the controller is not read as moving with it (DEC-155).
 pub fn snap(trace: &Trace, reference: &Trace, tol: &Tolerances) -> Trace {
     let r = crate::check::reference::Reference::new(reference);
     let pos = crate::check::tolerance::mm_nm(tol.keypoint_mm);
@@ -245,18 +248,32 @@ pub fn snap(trace: &Trace, reference: &Trace, tol: &Tolerances) -> Trace {
     };
     let mut out = trace.clone();
     let ref_end = reference.end();
+    // per axis, then the spindle speed: (the value reported, the value it was read as)
+    let mut held: [Option<(i64, i64)>; AXES + 1] = [None; AXES + 1];
+    let mut keep = |slot: usize, v: &mut i64, read: &dyn Fn(&mut i64)| match held[slot] {
+        Some((raw, as_read)) if raw == *v => *v = as_read,
+        _ => {
+            let raw = *v;
+            read(v);
+            held[slot] = Some((raw, *v));
+        }
+    };
     for e in &mut out.events {
         let t = e.t_us as i64;
         match &mut e.event {
             Event::Sample(s) => {
                 for a in r.axes() {
-                    if let Some(want) = r.pos_at(t, a.index) {
-                        near(&mut s.axes[a.index], want, pos);
+                    keep(a.index, &mut s.axes[a.index], &|v| {
+                        if let Some(want) = r.pos_at(t, a.index) {
+                            near(v, want, pos);
+                        }
+                    });
+                }
+                keep(AXES, &mut s.spindle_mrpm, &|v| {
+                    if let Some(want) = r.value_at(t, |x| x.spindle_mrpm) {
+                        near(v, want, rpm);
                     }
-                }
-                if let Some(want) = r.value_at(t, |x| x.spindle_mrpm) {
-                    near(&mut s.spindle_mrpm, want, rpm);
-                }
+                });
                 if let Some(want) = r.angle_at(t) {
                     near_angle(&mut s.spindle_mdeg, want);
                 }
