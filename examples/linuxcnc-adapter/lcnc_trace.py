@@ -495,7 +495,12 @@ class Trace:
             pass  # reset / E-stop: LinuxCNC stops the spindle itself, no function
         elif sp != sr:
             if kind == "g331" and sp != 0 and sr != 0:
-                pass  # the rigid tap's reversals are motion's own
+                # the rigid tap's reversals are motion's own; its direction pins back to the
+                # original sense (tp.c FINAL_REVERSAL, as the tap passes the start on the way
+                # out) are the M3/M4 that restores it, where the reference gives it (DEC-149)
+                if self.g331_dir and sr == self.g331_dir:
+                    self.function(t, "M", 3 if sr > 0 else 4)
+                    self.g331_dir = None
             elif kind and kind.startswith("cycle") and self.cur_is_running(r):
                 if sp != 0 and sr == 0 and self.program_end_stop():
                     self.pending_stop = t  # the cycle's own stop, or the program end's (below)

@@ -215,6 +215,20 @@ class Recording(unittest.TestCase):
         times = [e["t_us"] for e in ev]
         self.assertEqual(times, sorted(times))
 
+    def test_g331s_sense_restored_as_the_tap_passes_the_start_is_its_m3(self):
+        # R2 (g331/standard, after_m3): on the way out LinuxCNC gives the spindle its sense again
+        # as the tap passes the start (tp.c FINAL_REVERSAL), still in the G33.1 line: that is the
+        # M3 (the reference gives it there, DEC-149), not the line's end
+        rows = self.rows()
+        for k in range(4):
+            rows.append(row(128 + k, z=2.3 + 0.05 * k, rpm=-30 + 20 * k, revs=1.1, cmd=500, on=1, fwd=1, line=3))
+        rows += [row(132 + k, z=2.5, rpm=30, revs=1.2, cmd=500, on=1, fwd=1, line=4) for k in range(3)]
+        agent = {"c_run": 105, "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4}],
+                 "given": [], "messages": [], "end": {"reason": "program_end", "cycle": 134, "settled": 134}}
+        ev = lcnc_trace.Trace(self.PROGRAM, rows, agent, self.CFG, 1000).build()
+        m = [(e["t_us"], e["code"]) for e in ev if e["kind"] == "function" and e["letter"] == "M"]
+        self.assertEqual([x for x in m if x[1] == 3], [(0, 3), (18000, 3)])
+
     def test_a_pause_is_reported_where_the_axes_stand_still(self):
         # the task reports paused at cycle 114 while the rapid still moves until 116
         rows = [row(c) for c in range(100, 110)]
