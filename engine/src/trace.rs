@@ -297,7 +297,7 @@ pub enum Event {
         value: String,
     },
     /// The last event.
-    End(EndSummary),
+    End(Box<EndSummary>),
 }
 
 /// An event with its time.
