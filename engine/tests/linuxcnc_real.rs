@@ -70,3 +70,50 @@ fn g33_1_bottoms_where_linuxcnc_does_and_keeps_physics() {
     assert_eq!(zs.last().copied(), Some(5.0));
     assert_eq!(check(&trace, &Limits::of(&m), None), vec![]);
 }
+
+/// The fastest forward speed after the way out (the first sample below -1 rpm), rpm.
+fn forward_after_way_out(rpm: &[f64]) -> f64 {
+    let from = rpm.iter().position(|&r| r < -1.0).unwrap_or(rpm.len());
+    rpm[from..].iter().copied().fold(0.0, f64::max)
+}
+
+/// At the start point on the way out LinuxCNC commands the spindle its own sense again (tp.c
+/// RETRACTION -> FINAL_REVERSAL): it turns through zero without a stop, the tap following it past
+/// the start, and is turning forward again while the tap moves back (the recording: +330 rpm at
+/// the M5); the reference gives M3 there (DEC-149). It used to brake the spindle to rest, move
+/// back and give M3 after, so the M5 that follows found it at rest.
+#[test]
+fn g33_1_turns_the_spindle_through_zero_at_the_start_as_linuxcnc_does() {
+    let rec_rpm: Vec<f64> = include_str!("data/lcnc_g331.csv")
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').nth(2)?.parse().ok())
+        .collect();
+    let recorded = forward_after_way_out(&rec_rpm);
+    assert!(recorded > 300.0, "LinuxCNC's spindle turns forward again at {recorded} rpm");
+    let m = sim_machine();
+    let trace = m.run_to_trace(&m.parse(PROGRAM).unwrap(), &RunOptions::default());
+    let (mut rpm, mut zs) = (Vec::new(), Vec::new());
+    let mut m3_at = None;
+    for e in &trace.events {
+        match &e.event {
+            Event::Sample(s) => {
+                rpm.push(s.spindle_mrpm as f64 / 1000.0);
+                zs.push(s.axes[2] as f64 / 1e6);
+            }
+            Event::Function { letter: 'M', code: 3 } => m3_at = Some(zs.len()),
+            _ => {}
+        }
+    }
+    let reference = forward_after_way_out(&rpm);
+    assert!((reference - recorded).abs() < 60.0, "forward again at {reference} rpm, LinuxCNC {recorded} rpm");
+    // M3 as the tap passes the start on its way up, before its top past the start (the
+    // recording's command flips at Z4.9878 going up at 10 mm/s).
+    let k = m3_at.expect("M3 after the tap");
+    let top = (k..zs.len()).max_by(|&a, &b| zs[a].total_cmp(&zs[b])).unwrap();
+    assert!(
+        k < top && (zs[k] - 5.0).abs() <= 0.011,
+        "M3 at Z{} (sample {k}), the top at sample {top}",
+        zs[k]
+    );
+}

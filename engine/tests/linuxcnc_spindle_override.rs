@@ -72,6 +72,24 @@ fn g33_1_follows_a_spindle_override_at_once_in_its_groove() {
     assert!(!s.iter().any(|r| r.3.abs() > 500.0 + 1e-6));
 }
 
+/// The reversal at Z runs at the spindle's ramp from the speed it turns at: LinuxCNC (the adapter,
+/// `g331/spindle_override`, issue 16) reversed 250 rpm (S500 at 50 %) in 100 ms through zero and
+/// bottomed at Z-10.086; the reference braked in the time computed for S500 (half the rate) and
+/// bottomed at Z-10.174, 60 ms behind for the rest of the tap (DEC-149).
+#[test]
+fn g33_1_reverses_an_overridden_spindle_at_its_ramp() {
+    let inputs = InputSchedule::default().when(
+        Condition::Phase(Phase::Cutting),
+        1,
+        500_000,
+        Input::SpindleOverride(50),
+    );
+    let opts = RunOptions { inputs, sample_us: 1000, ..RunOptions::default() };
+    let t = run("linuxcnc", &[], "G21 M3 S500\nG0 X0 Z5\nG33.1 Z-10 K1\nG0 Z20\nM2\n", &opts);
+    let bottom = t.samples().map(|(_, s)| s.axes[2]).min().unwrap() as f64 / 1e6;
+    assert!((bottom + 10.086).abs() < 0.01, "bottom Z{bottom}, LinuxCNC Z-10.086");
+}
+
 #[test]
 fn a_g76_pass_follows_a_spindle_override_at_once_in_its_groove() {
     let inputs = InputSchedule::default().when(

@@ -16,16 +16,10 @@ fn data() -> PathBuf {
 
 /// Recordings known to diverge (set/name), each with its reason: a ratchet, taken off the list
 /// when it becomes conformant.
-const EXPECTED_DIVERGENT: [(&str, &str); 7] = [
+const EXPECTED_DIVERGENT: [(&str, &str); 6] = [
     (
         "debian-2.9-exact-stop/g84_g18_g61_1",
         "the permuted G18 G84 feed points of debian-2.9/g84_g18, under exact stop too (DEC-84)",
-    ),
-    (
-        "debian-2.9-exact-stop/g331_g91_g61_1",
-        "each G33.1's way out turns the spindle through zero at the start point where the reference \
-         brakes it to rest (docs/linuxcnc-conformance.md, R2), so the spindle's angle differs after \
-         two holes and the third tap starts a turn earlier",
     ),
     (
         "debian-2.9/g84_g18",

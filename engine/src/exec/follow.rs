@@ -72,7 +72,7 @@ impl Exec<'_> {
                 target[f.axis] = f.target;
                 self.start_motion(target, Path::Rapid { profiles, backlash });
             }
-            FollowKind::Brake { brake_us } => {
+            FollowKind::Brake { .. } | FollowKind::Reversal => {
                 if rpm == 0.0 {
                     return;
                 }
@@ -88,7 +88,16 @@ impl Exec<'_> {
                 if self.cfg.spindle_brake_us > 0 {
                     a_limit = a_limit.max(max_rpm / self.cfg.spindle_brake_us as f64);
                 }
-                let total = brake_us.max(1).max((rpm.abs() / a_limit).floor() as Micros);
+                let total = match f.kind {
+                    FollowKind::Brake { brake_us } => {
+                        brake_us.max(1).max((rpm.abs() / a_limit).floor() as Micros)
+                    }
+                    // Commanded the other sense already: zero is passed at its own ramp.
+                    _ => {
+                        let a = self.spindle.ramp(now).map_or(a_limit, |r| r.slope.abs());
+                        ((rpm.abs() / a).floor() as Micros).max(1)
+                    }
+                };
                 let (v0, cut_locked) =
                     self.follow_v.take().unwrap_or((rpm.abs() * lead / 60e6, self.machine_lock));
                 let a_spindle = rpm.abs() * lead / 60e6 / total as f64;
@@ -101,10 +110,12 @@ impl Exec<'_> {
                 let profile = profile.still_until(ceil_to(now + rest, period.max(1)) - now);
                 let travel = profile.dist.round() as Nm;
                 target[f.axis] = self.cmd[f.axis] + d.signum() * travel;
-                self.spindle.command(now, 0.0);
-                self.spindle.seg_accel = Some(rpm.abs() / total as f64);
-                self.stall_angle = None;
-                self.spindle_changed();
+                if matches!(f.kind, FollowKind::Brake { .. }) {
+                    self.spindle.command(now, 0.0);
+                    self.spindle.seg_accel = Some(rpm.abs() / total as f64);
+                    self.stall_angle = None;
+                    self.spindle_changed();
+                }
                 let mut profiles = [Profile::still(); AXES];
                 profiles[f.axis] = profile;
                 self.start_motion(target, Path::Rapid { profiles, backlash: [0.0; AXES] });

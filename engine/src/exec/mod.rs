@@ -442,12 +442,22 @@ impl Exec<'_> {
     }
 
     /// Raises an alarm: the machine stops where it is and the run ends.
-    fn raise(&mut self, mut alarm: Alarm) {
+    fn raise(&mut self, alarm: Alarm) {
+        self.report(alarm);
+        self.halt();
+    }
+
+    /// Reports an alarm without stopping (`Step::Report`).
+    fn report(&mut self, mut alarm: Alarm) {
         if alarm.line.is_none() {
             alarm.line = self.cur_line;
         }
         self.alarms += 1;
         self.emit(Event::Alarm(alarm));
+    }
+
+    /// The run ends on an alarm already reported: the machine stops where it is.
+    fn halt(&mut self) {
         // The motion stops where it is: a tapping stroke ends with the spindle at rest at its
         // present (or frozen) angle and RGSPP / RGSPM off (COM-SYNC-03, COM-INP-09); the drive
         // reports zero speed unless it already does.

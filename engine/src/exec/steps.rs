@@ -226,6 +226,8 @@ impl Exec<'_> {
             }
             Step::End => self.finish(EndReason::ProgramEnd),
             Step::Alarm(a) => self.raise(a),
+            Step::Report(a) => self.report(a),
+            Step::Halt => self.halt(),
         }
     }
 

@@ -3,9 +3,11 @@
 //! index pulse), reaching the end point still locked to it; there the spindle brakes (KND) or
 //! reverses (LinuxCNC) and the tap follows it (overshoot = lead × revolutions turned meanwhile,
 //! within an allowance); on KND once the drive reports zero speed the spindle turns the other way
-//! and the tap returns behind it to the start point, where both stop; LinuxCNC follows the
-//! reversed spindle out through the start, brakes with it past the start and moves back
-//! unsynchronised (DEC-87). The spindle then resumes its earlier direction. Rules KND-G93-* in
+//! and the tap returns behind it to the start point, where both stop, and the spindle then
+//! resumes its earlier direction; LinuxCNC follows the reversed spindle out through the start,
+//! where the spindle is commanded its earlier direction again and turns through zero, follows it
+//! past the start until it turns the other way and moves back unsynchronised (DEC-87, DEC-149).
+//! Rules KND-G93-* in
 //! `docs/rules/knd-lathe.md`, LCNC-G331-* in `docs/rules/linuxcnc.md`.
 //!
 //! The dialect positions to the start point; this builder takes over there and ends there.
@@ -86,22 +88,23 @@ pub fn follow_tap(c: &FollowTap, out: &mut Vec<Step>) {
         out.push(zsp.clone());
     }
     out.push(Step::Phase(Phase::Retract));
+    let (code, effect) = if c.forward { (3, SpindleEffect::Forward) } else { (4, SpindleEffect::Reverse) };
     if c.linuxcnc {
-        // Out behind the reversed spindle through the start, braking with it past the start (the
-        // same allowance), then back unsynchronised (shared/linuxcnc-real README items 5 and 7).
+        // Out behind the reversed spindle through the start, where the spindle is commanded its
+        // own sense again (tp.c RETRACTION -> FINAL_REVERSAL: it turns through zero without a
+        // stop); the tap follows it past the start (the same allowance) until it turns the other
+        // way, then goes back unsynchronised (shared/linuxcnc-real README items 5 and 7; the
+        // recordings' speed command flips as the tap passes the start, DEC-149).
         out.push(follow(c.start, FollowKind::Through { rpm: c.rpm, forward: !c.forward }, c.overshoot));
-        out.push(follow(
-            c.start.saturating_sub(dir * c.allowance_nm),
-            FollowKind::Brake { brake_us: c.brake_us },
-            c.overshoot,
-        ));
+        out.push(Step::FunctionWithMotion { letter: 'M', code, effect });
+        out.push(follow(c.start.saturating_sub(dir * c.allowance_nm), FollowKind::Reversal, c.overshoot));
         out.push(follow(c.start, FollowKind::Unsynced, c.overshoot));
+        out.push(Step::AwaitFunction);
     } else {
         out.push(follow(c.start, FollowKind::Return { rpm: c.rpm, forward: !c.forward }, c.overshoot));
+        out.extend(zsp);
+        out.push(Step::Function { letter: 'M', code, effect });
     }
-    out.extend(zsp);
-    let (code, effect) = if c.forward { (3, SpindleEffect::Forward) } else { (4, SpindleEffect::Reverse) };
-    out.push(Step::Function { letter: 'M', code, effect });
     out.push(Step::HoldSuppress(false));
 }
 

@@ -170,6 +170,11 @@ pub enum FollowKind {
         /// Direction.
         forward: bool,
     },
+    /// The spindle, already commanded its other sense, ramps through zero; the axis follows it,
+    /// braking behind it, to the instant it turns the other way, overshooting by lead × the
+    /// revolutions turned meanwhile (LinuxCNC's G33.1 past the start: the spindle is not brought
+    /// to rest).
+    Reversal,
     /// The axis alone, unsynchronised, to the target at its rapid rate and time constant; the
     /// spindle keeps its own state (LinuxCNC's final move back to the G33.1 start).
     Unsynced,
@@ -281,6 +286,13 @@ pub enum Step {
     End,
     /// Raise an alarm at this point of the execution and stop.
     Alarm(Alarm),
+    /// Report an alarm at this point and go on: the motion queued before it still runs (LinuxCNC's
+    /// read-ahead finding an error while reading a line ahead of motion, LCNC-LEX-05; a
+    /// [`Step::Halt`] follows where the program stops).
+    Report(Alarm),
+    /// The run ends here on the alarm already reported by a [`Step::Report`] (end reason
+    /// `alarm`, no second alarm).
+    Halt,
     /// An axis locked to a spindle in speed mode (the spindle leads, the axis follows its
     /// encoder): see [`Follow`].
     Follow(Follow),

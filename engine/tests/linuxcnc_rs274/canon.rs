@@ -162,6 +162,17 @@ pub fn run_engine(text: &str) -> Result<Outcome, String> {
     let mut o = Outcome::default();
     let mut interp = m.dialect.interpreter(&m.params);
     interp.program(&program);
+    // An error of reading a line found by the read-ahead is reported by the first block and the
+    // run goes on (DEC-150): the interpreter still plans every block up to the bad one.
+    let mut probe = m.dialect.interpreter(&m.params);
+    probe.program(&program);
+    let mut first = Vec::new();
+    let reported = program.blocks.first().is_some_and(|b| {
+        probe.block(b, &mut first).is_ok() && first.iter().any(|s| matches!(s, Step::Report(_)))
+    });
+    if let (true, Some((_, at))) = (reported, &mut alarm) {
+        *at = None;
+    }
     let mut cur = [0.0; 3];
     let nm = |v: i64| v as f64 / 1e6;
     for b in &program.blocks {
@@ -216,7 +227,7 @@ pub fn run_engine(text: &str) -> Result<Outcome, String> {
                         FollowKind::Return { .. } | FollowKind::Through { .. } | FollowKind::Unsynced => {
                             cur = p
                         }
-                        FollowKind::Brake { .. } => {}
+                        FollowKind::Brake { .. } | FollowKind::Reversal => {}
                     }
                 }
                 _ => {}

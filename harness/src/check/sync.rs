@@ -264,6 +264,16 @@ impl Planner {
                 self.block = self.threads.iter().find(|x| **x == c).zip(self.feed).map(|(g, f)| (t, *g, f));
                 self.phased = false;
             }
+            // The spindle given its own sense again ends a way out that follows it (LinuxCNC's
+            // G33.1 at its start point: from there the tap brakes with the spindle turning
+            // through zero, then moves back unsynchronised while it speeds up, DEC-149).
+            Event::Function { letter: 'M', code: 3 | 4 }
+                if self.open.is_some_and(|(_, k, ..)| k == Kind::Follow) =>
+            {
+                if let Some((a, k, l, g)) = self.open.take() {
+                    self.raw.push(Raw::Fixed(a, t, k, l, g));
+                }
+            }
             Event::Phase(p) => {
                 self.phased = true;
                 if let Some((a, k, l, g)) = self.open.take() {
@@ -503,6 +513,41 @@ mod tests {
         let t = m.run_to_trace(&m.parse(&mixed).unwrap(), &nc_engine::RunOptions::default());
         let cuts = t.events.iter().filter(|e| matches!(e.event, Event::Phase(Phase::Cutting))).count();
         assert!(cuts >= 4, "the mixed loop taps and drills twice: {cuts} cuts");
+    }
+
+    /// A G33.1's way out ends at the M3 that gives the spindle its own sense again at the start
+    /// point: the move back after it is not synchronised while the spindle speeds up (DEC-149).
+    #[test]
+    fn a_g33_1_way_out_ends_where_the_spindle_is_given_its_sense_again() {
+        let m = nc_engine::Machine::new("linuxcnc").unwrap();
+        let program = "G21 G90 M3 S500\nG0 X0 Y0 Z5\nG33.1 Z-10 K1\nG0 Z20\nM2\n";
+        let t = m.run_to_trace(&m.parse(program).unwrap(), &nc_engine::RunOptions::default());
+        let end = t.events.last().map_or(0, |e| e.t_us as i64);
+        let m3 = t
+            .events
+            .iter()
+            .filter(|e| matches!(e.event, Event::Function { letter: 'M', code: 3 }))
+            .map(|e| e.t_us as i64)
+            .next_back()
+            .unwrap();
+        let idle = t
+            .events
+            .iter()
+            .filter(|e| matches!(e.event, Event::Phase(Phase::Idle)))
+            .map(|e| e.t_us as i64)
+            .next_back()
+            .unwrap();
+        assert!(m3 < idle, "M3 at {m3} µs comes before the move back ends at {idle} µs");
+        let ends: Vec<i64> = plan(&t, end)
+            .raw
+            .iter()
+            .filter_map(|r| match r {
+                Raw::Fixed(_, b, Kind::Follow, ..) => Some(*b),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(ends.len(), 2, "{ends:?}");
+        assert_eq!(ends[1], m3);
     }
 
     /// The first pass plans as it reads: a lean skeleton (no phases, blocks or inputs kept) gives

@@ -325,11 +325,14 @@ impl Body {
                         out.push(spindle_m(fwd));
                     }
                     880 => {
-                        // LCNC-CYC-06: spindle stop and program stop; the operator's manual
-                        // retract is modelled as a rapid to the clearance after cycle start.
+                        // LCNC-CYC-06: spindle stop and program stop, the spindle again after
+                        // cycle start; the retract is the operator's (a jog, not modelled): no
+                        // move. The interpreter takes the tool to be at the clearance level as
+                        // LinuxCNC's does (rs274: the next move starts from there), while it
+                        // stands at the bottom, where the next move really starts (DEC-151).
                         out.push(spindle_m(5));
                         out.push(Step::Stop { optional: false });
-                        m.rapid(level(at_r, clear), out);
+                        m.pos = level(at_r, clear);
                         out.push(spindle_m(fwd));
                     }
                     890 => m.feed_to(level(at_r, clear), out),

@@ -69,6 +69,38 @@ pub struct LcncInterp {
     /// An error LinuxCNC's read-ahead finds before the program runs (LCNC-LEX-05): raised by the
     /// first block, before anything moves.
     refused: Option<Alarm>,
+    /// An error of LinuxCNC's read phase its read-ahead finds (LCNC-LEX-05): reported by the first
+    /// block without stopping; the lines queued before it run, then the program ends.
+    read_error: Option<ReadError>,
+}
+
+/// A read-phase error found by the read-ahead, and where the program it stopped ends.
+#[derive(Debug, Clone)]
+struct ReadError {
+    alarm: Alarm,
+    /// Reported (by the first block).
+    reported: bool,
+    /// The last block whose steps LinuxCNC queued, and how many of its steps (the rest, a
+    /// straight feed LinuxCNC's canon still held back, never reach motion): the run halts there.
+    halt: Option<(u32, usize)>,
+}
+
+/// What a planned step is to LinuxCNC's canonical layer before motion: a straight feed is held
+/// back (emccanon.cc `see_segment`: chained for blending until another canonical command flushes
+/// it), bookkeeping makes no command, anything else flushes the held feed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Queued {
+    Feed,
+    Flush,
+    Quiet,
+}
+
+fn queued_as(s: &Step) -> Queued {
+    match s {
+        Step::Feed { .. } => Queued::Feed,
+        Step::Phase(_) | Step::HoldSuppress(_) => Queued::Quiet,
+        _ => Queued::Flush,
+    }
 }
 
 /// Most steps LinuxCNC's task interprets ahead of motion (its interpreter list,
@@ -90,6 +122,7 @@ impl LcncInterp {
             returned: None,
             params: p.clone(),
             refused: None,
+            read_error: None,
         }
     }
 
@@ -103,19 +136,26 @@ impl LcncInterp {
         ahead.program = self.program.clone();
         let mut queued = 0;
         let mut out = Vec::new();
+        // Each block read: its line and what its steps are to the canonical layer.
+        let mut read: Vec<(u32, Vec<Queued>)> = Vec::new();
         for b in &program.blocks {
             out.clear();
             if let Err(a) = ahead.block(b, &mut out) {
                 // Only an error of LinuxCNC's execute phase (converting a canned cycle, a spindle
                 // that is not turning) aborts the read-ahead; an error of its read phase (a word
                 // missing or misplaced, the file's end) stops the reading and the lines before
-                // run (through the adapter: G76 without J, G33 without K, a file without M2).
-                // NC-1098 is this project's bound on a runaway block, not LinuxCNC's error.
+                // run (through the adapter: G76 without J, G33 without K, a file without M2):
+                // it is reported at once and the program ends after them (DEC-150).
+                // NC-1098 (this project's bound on a runaway block) and NC-1004 (not modelled)
+                // are not LinuxCNC's errors: raised where the program reaches them.
                 if ahead.m.cycle_error || a.kind == AlarmKind::LcncSpindle {
                     self.refused = Some(a);
+                } else if !matches!(a.kind, AlarmKind::LcncLoopLimit | AlarmKind::NotModelled) {
+                    self.read_error = Some(ReadError { alarm: a, reported: false, halt: halt_point(&read) });
                 }
                 return;
             }
+            read.push((b.line, out.iter().map(queued_as).collect()));
             queued += out.len();
             let busts = out.iter().any(|s| matches!(s, Step::Stop { .. } | Step::End));
             if ahead.m.ended || busts || queued >= READ_AHEAD_MAX {
@@ -443,6 +483,29 @@ impl Interpreter for LcncInterp {
         if let Some(a) = self.refused.take() {
             return Err(a);
         }
+        if let Some(r) = &mut self.read_error {
+            if !r.reported {
+                r.reported = true;
+                out.push(Step::Report(r.alarm.clone()));
+            }
+            let first = out.len();
+            match r.halt {
+                Some((line, keep)) if line == block.line => {
+                    self.read_error = None;
+                    if keep > 0 {
+                        self.block(block, out)?;
+                        out.truncate(first + keep);
+                    }
+                    out.push(Step::Halt);
+                    return Ok(());
+                }
+                None => {
+                    out.push(Step::Halt);
+                    return Ok(());
+                }
+                Some(_) => {}
+            }
+        }
         self.budget = 0;
         if block.text == END_OF_FILE {
             return Err(Self::err(block.line, "File ended with no percent sign or program end"));
@@ -516,6 +579,24 @@ impl Interpreter for LcncInterp {
             .collect();
         self.read_ahead(program);
     }
+}
+
+/// Where a program whose read-ahead stopped on a read-phase error ends: after the last block
+/// that queued something, without a straight feed that nothing flushed to motion after it (its
+/// block's steps before it still run). None: nothing was queued.
+fn halt_point(read: &[(u32, Vec<Queued>)]) -> Option<(u32, usize)> {
+    let last_cmd = |k: usize| read[k].1.iter().rposition(|q| *q != Queued::Quiet);
+    let mut k = read.iter().rposition(|(_, q)| q.iter().any(|q| *q != Queued::Quiet))?;
+    let j = last_cmd(k)?;
+    if read[k].1[j] != Queued::Feed {
+        return Some((read[k].0, read[k].1.len()));
+    }
+    // The held feed: its block up to it, or the block before that queued something.
+    if read[k].1[..j].iter().any(|q| *q != Queued::Quiet) {
+        return Some((read[k].0, j));
+    }
+    k = read[..k].iter().rposition(|(_, q)| q.iter().any(|q| *q != Queued::Quiet))?;
+    Some((read[k].0, read[k].1.len()))
 }
 
 /// Whether a line starts a subroutine definition.

@@ -121,7 +121,6 @@ pub struct CycleMemo {
 #[derive(Debug, Clone, Copy)]
 pub struct Cfg {
     max_rpm: f64,
-    ramp_us: Micros,
     overshoot_pitches: f64,
 }
 
@@ -130,7 +129,6 @@ impl Cfg {
     pub fn from(p: &Params) -> Self {
         Cfg {
             max_rpm: p.get("nc.spindle_max_rpm").max(1.0),
-            ramp_us: (p.get("nc.spindle_ramp_ms") * 1000.0) as Micros,
             overshoot_pitches: p.get("nc.rigid_overshoot_pitches"),
         }
     }
@@ -645,7 +643,6 @@ impl Machine {
             return Ok(());
         }
         let rpm = self.s.round().min(self.cfg.max_rpm) as u32;
-        let brake_us = (rpm as f64 / self.cfg.max_rpm * self.cfg.ramp_us as f64) as Micros;
         // LinuxCNC's motion controller starts a synchronised move with the spindle at speed.
         out.push(Step::AwaitAtSpeed);
         follow_tap(
@@ -656,7 +653,9 @@ impl Machine {
                 lead_nm: lead,
                 rpm: rpm.max(1),
                 forward: self.spindle > 0,
-                brake_us: brake_us.max(1000),
+                // LinuxCNC reverses the spindle at Z from the speed it turns at (S × the
+                // override in force) at its ramp: no brake time of its own (DEC-149).
+                brake_us: 0,
                 allowance_nm: (lead as f64 * self.cfg.overshoot_pitches).round() as Nm,
                 zsp_timeout_us: None,
                 backlash: false,
