@@ -159,7 +159,7 @@ impl Motion {
 
     /// [`Motion::pos`] and [`Motion::spindle`] at `t`, a tapping stroke's profile evaluated once
     /// for both (the same expressions, so the same values): the engine samples both every period.
-    #[inline]
+    #[inline(always)]
     pub fn pos_and_spindle(&self, t: Micros) -> (Pos, Option<(f64, f64)>) {
         match &self.path {
             Path::Tap { profile, axis, backlash, lead, spin } => {
