@@ -296,8 +296,9 @@ pub enum Event {
         /// Its value as text (`on`, `off`, `120%`, ...).
         value: String,
     },
-    /// The last event.
-    End(EndSummary),
+    /// The last event (boxed: it is written once, and every sample moved or kept is the size
+    /// of the largest event).
+    End(Box<EndSummary>),
 }
 
 /// An event with its time.
@@ -411,5 +412,22 @@ impl VecSink {
             }),
             events: self.events,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A sample event is moved and copied for every sample of every run (sinks, batches, the
+    /// check's kept events): the end summary, three times a sample's size, is not inline.
+    #[test]
+    fn a_trace_event_is_a_sample_and_little_more() {
+        assert!(std::mem::size_of::<EndSummary>() > 2 * std::mem::size_of::<Sample>());
+        assert!(
+            std::mem::size_of::<TraceEvent>() <= std::mem::size_of::<Sample>() + 16,
+            "{} bytes",
+            std::mem::size_of::<TraceEvent>()
+        );
     }
 }

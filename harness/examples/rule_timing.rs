@@ -66,7 +66,7 @@ fn main() {
     let t_end = events.last().map_or(0, |e| e.t_us);
     events.push(TraceEvent {
         t_us: t_end,
-        event: Event::End(EndSummary {
+        event: Event::End(Box::new(EndSummary {
             reason: EndReason::Stopped,
             state: Default::default(),
             command: Default::default(),
@@ -74,7 +74,7 @@ fn main() {
             modal: Vec::new(),
             alarms: 0,
             blocks: 0,
-        }),
+        })),
     });
     let trace = Trace { meta, events };
     let import_s = t0.elapsed().as_secs_f64();

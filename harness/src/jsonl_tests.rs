@@ -44,7 +44,7 @@ fn events() -> Vec<TraceEvent> {
         ev(2800, Event::Alarm(Alarm::new(AlarmKind::EmergencyStop, ""))),
         ev(
             3000,
-            Event::End(EndSummary {
+            Event::End(Box::new(EndSummary {
                 reason: EndReason::Alarm,
                 state: sample(50_000_000, -1_500_000, 0, 0, 0),
                 command: [1, 2, 3, 4, 5, 6],
@@ -52,7 +52,7 @@ fn events() -> Vec<TraceEvent> {
                 modal: vec!["G00".into(), "G98".into()],
                 alarms: 2,
                 blocks: 12,
-            }),
+            })),
         ),
     ]
 }

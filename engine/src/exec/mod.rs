@@ -554,6 +554,7 @@ impl Exec<'_> {
         self.spindle.at(t)
     }
 
+    #[inline(always)]
     fn sample_at(&self, t: Micros) -> Sample {
         // The motion's positions and a tapping stroke's spindle from one look at its profile.
         let (cmd, tap) = match &self.motion {
@@ -612,6 +613,6 @@ impl Exec<'_> {
             alarms: self.alarms,
             blocks: self.blocks,
         };
-        self.emit(Event::End(summary));
+        self.emit(Event::End(Box::new(summary)));
     }
 }

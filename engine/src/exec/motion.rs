@@ -159,6 +159,7 @@ impl Motion {
 
     /// [`Motion::pos`] and [`Motion::spindle`] at `t`, a tapping stroke's profile evaluated once
     /// for both (the same expressions, so the same values): the engine samples both every period.
+    #[inline(always)]
     pub fn pos_and_spindle(&self, t: Micros) -> (Pos, Option<(f64, f64)>) {
         match &self.path {
             Path::Tap { profile, axis, backlash, lead, spin } => {
@@ -167,9 +168,16 @@ impl Motion {
                 let pos = if dt >= self.duration() {
                     self.target
                 } else {
-                    let mut p = self.start;
                     let d = self.target[*axis] - self.start[*axis];
-                    p[*axis] = self.start[*axis] + round_i64(d.signum() as f64 * (s - backlash).max(0.0));
+                    let v = self.start[*axis] + round_i64(d.signum() as f64 * (s - backlash).max(0.0));
+                    // Chosen slot by slot (no store at a computed index): the position stays in
+                    // registers, not stored piecewise and read back whole (a stalled load).
+                    let mut p = self.start;
+                    for (k, q) in p.iter_mut().enumerate() {
+                        if k == *axis {
+                            *q = v;
+                        }
+                    }
                     p
                 };
                 (pos, Some((spin * s / lead * 360.0, spin * v / lead * 60e6)))

@@ -609,7 +609,7 @@ mod tests {
             alarms: 0,
             blocks: 0,
         };
-        events.push(TraceEvent { t_us: end, event: Event::End(summary) });
+        events.push(TraceEvent { t_us: end, event: Event::End(Box::new(summary)) });
         Trace { meta: TraceMeta { dialect: "", axes: Vec::new(), period_us: 1000, sample_us: 1000 }, events }
     }
 

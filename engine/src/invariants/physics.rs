@@ -385,7 +385,7 @@ mod tests {
             alarms: 0,
             blocks: 0,
         };
-        events.push(TraceEvent { t_us: samples.len() as Micros * 1000, event: Event::End(end) });
+        events.push(TraceEvent { t_us: samples.len() as Micros * 1000, event: Event::End(Box::new(end)) });
         Trace {
             meta: TraceMeta { dialect: "", axes: AXES_Z.to_vec(), period_us: 1000, sample_us: 1000 },
             events,

@@ -687,7 +687,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
         let t_end = self.last_t.max(events.last().map_or(0, |e| e.t_us as i64)).max(0) as u64;
         events.push(TraceEvent {
             t_us: t_end,
-            event: Event::End(EndSummary {
+            event: Event::End(Box::new(EndSummary {
                 reason,
                 state,
                 command: state.axes,
@@ -695,7 +695,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
                 modal: Vec::new(),
                 alarms: self.alarms,
                 blocks: 0,
-            }),
+            })),
         });
         Trace { meta: self.r.trace.meta.clone(), events }
     }

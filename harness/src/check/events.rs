@@ -84,6 +84,8 @@ pub enum Finding {
 struct Queue {
     refs: Vec<(i64, usize)>,
     next: usize,
+    /// Its index in [`Matcher::names`].
+    id: u32,
 }
 
 /// How many reference occurrences ahead a recorded event may match.
@@ -93,7 +95,11 @@ const LOOK_AHEAD: usize = 4;
 #[derive(Debug)]
 pub struct Matcher {
     queues: BTreeMap<Key, Queue>,
-    keys: Vec<Key>,
+    /// The distinct keys, by first occurrence.
+    names: Vec<Key>,
+    /// Each reference event's key, an index into `names` (memory: one word per event, not a
+    /// whole key; a run has few distinct keys).
+    keys: Vec<u32>,
     ref_t: Vec<i64>,
     rec_t: Vec<Option<i64>>,
     last: Option<(usize, i64)>,
@@ -113,18 +119,25 @@ impl Matcher {
     /// can carry).
     pub fn new_filtered(reference: &Trace, keep: impl Fn(&Key) -> bool) -> Matcher {
         let mut queues: BTreeMap<Key, Queue> = BTreeMap::new();
+        let mut names = Vec::new();
         let mut keys = Vec::new();
         let mut ref_t = Vec::new();
         for e in &reference.events {
             if let Some(k) = Key::of(&e.event).filter(|k| keep(k)) {
-                queues.entry(k.clone()).or_default().refs.push((e.t_us as i64, keys.len()));
-                keys.push(k);
+                let q = queues.entry(k).or_insert_with_key(|k| {
+                    names.push(k.clone());
+                    Queue { id: (names.len() - 1) as u32, ..Queue::default() }
+                });
+                q.refs.push((e.t_us as i64, keys.len()));
+                keys.push(q.id);
                 ref_t.push(e.t_us as i64);
             }
         }
+        keys.shrink_to_fit();
+        ref_t.shrink_to_fit();
         let total = keys.len();
         let rec_t = vec![None; total];
-        Matcher { queues, keys, ref_t, rec_t, last: None, matched: 0, total }
+        Matcher { queues, names, keys, ref_t, rec_t, last: None, matched: 0, total }
     }
 
     /// The matched events so far: (reference time, recorded time), in the reference's order.
@@ -167,7 +180,8 @@ impl Matcher {
         }
         if let Some((li, lt)) = self.last {
             if idx < li && t_ref < lt {
-                out.push(Finding::Order(key.clone(), t_ref, t, self.keys[li].clone(), lt));
+                let before = self.names[self.keys[li] as usize].clone();
+                out.push(Finding::Order(key.clone(), t_ref, t, before, lt));
             }
         }
         if self.last.is_none_or(|(li, _)| idx > li) {
@@ -182,5 +196,48 @@ impl Matcher {
                 out.push(Finding::Missing(k.clone(), t));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nc_engine::trace::{Event, Signal, Trace, TraceEvent, TraceMeta};
+
+    use super::{Finding, Key, Matcher};
+    use crate::check::Tolerances;
+
+    fn edge(t_us: u64, signal: Signal, value: bool) -> TraceEvent {
+        TraceEvent { t_us, event: Event::Signal { signal, value } }
+    }
+
+    /// A recorded event matched with a reference event earlier than the one matched before it
+    /// is out of order, and the finding names that one (its key kept as an index per event).
+    #[test]
+    fn out_of_order_names_the_event_matched_before() {
+        let meta = TraceMeta { dialect: "fanuc-mill", axes: Vec::new(), period_us: 1000, sample_us: 1000 };
+        let events = vec![
+            edge(10_000, Signal::Rgtap, true),
+            TraceEvent { t_us: 15_000, event: Event::Function { letter: 'M', code: 29 } },
+            edge(20_000, Signal::Rtap, true),
+            edge(30_000, Signal::Rgtap, false),
+        ];
+        let mut m = Matcher::new(&Trace { meta, events });
+        let tol = Tolerances::default();
+        let mut out = Vec::new();
+        m.record(Key::Edge(Signal::Rtap, true), 20_000, &tol, &mut out);
+        m.record(Key::Edge(Signal::Rgtap, true), 21_000, &tol, &mut out);
+        let order: Vec<_> = out.iter().filter(|f| matches!(f, Finding::Order(..))).collect();
+        assert_eq!(
+            order,
+            [&Finding::Order(
+                Key::Edge(Signal::Rgtap, true),
+                10_000,
+                21_000,
+                Key::Edge(Signal::Rtap, true),
+                20_000
+            )]
+        );
+        assert_eq!(m.matched, 2);
+        assert_eq!(m.marks(), [(10_000, 21_000), (20_000, 20_000)]);
     }
 }

@@ -76,9 +76,24 @@ impl std::fmt::Debug for Reference<'_> {
 pub fn unwrap_delta(a0: i64, m0: i64, a1: i64, m1: i64, dt_us: i64) -> f64 {
     let expected = (m0 + m1) as f64 / 2.0 * 6.0 * dt_us as f64 / 1e6;
     let raw = (a1 - a0) as f64;
-    let diff = (raw - expected).rem_euclid(360_000.0);
+    let diff = rem_turn(raw - expected);
     let diff = if diff > 180_000.0 { diff - 360_000.0 } else { diff };
     expected + diff
+}
+
+/// `x.rem_euclid(360_000.0)` (milli-degrees into one turn), bit for bit, without libm's `fmod`
+/// when `x` is within a turn either side of 0 (the remainder is then `x` or `x + 360 000`
+/// exactly): the angles compared per sample mostly are.
+#[inline]
+pub fn rem_turn(x: f64) -> f64 {
+    const TURN: f64 = 360_000.0;
+    if (0.0..TURN).contains(&x) {
+        x
+    } else if x > -TURN && x < 0.0 {
+        x + TURN
+    } else {
+        x.rem_euclid(TURN)
+    }
 }
 
 /// What a [`MotionDetector`] watches.
@@ -437,7 +452,7 @@ impl<'a> Reference<'a> {
             }
             _ => w.cum[i],
         };
-        Some(a.rem_euclid(360_000.0))
+        Some(rem_turn(a))
     }
 
     /// Position of `slot` at `t`, interpolated.
@@ -597,5 +612,49 @@ impl<'a> Reference<'a> {
     /// Whether an overload retract had started by `t` (within the reference's run).
     pub fn overload_by(&self, t: i64) -> bool {
         self.phases.iter().any(|(tp, p)| *p == Phase::OverloadRetract && *tp <= t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rem_turn;
+
+    #[test]
+    fn rem_turn_is_rem_euclid_bit_for_bit() {
+        let turn = 360_000.0f64;
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            turn,
+            -turn,
+            turn - 1e-9,
+            -turn + 1e-9,
+            -1e-300,
+            1e-300,
+            -5e-324,
+            179_999.5,
+            -180_000.0,
+            2.0 * turn,
+            -2.0 * turn,
+            1e17,
+            -1e17,
+            f64::MAX,
+            f64::MIN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let mut r = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..200_000 {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            let u = (r >> 11) as f64 / (1u64 << 53) as f64;
+            xs.push((u - 0.5) * 6.0 * turn);
+            xs.push(f64::from_bits(r));
+        }
+        for x in xs {
+            assert_eq!(rem_turn(x).to_bits(), x.rem_euclid(turn).to_bits(), "{x:e}");
+        }
     }
 }

@@ -445,8 +445,8 @@ pub fn error_at(
             return None;
         }
         let lead_nm_per_mdeg = (rs[i + 1].axes[w.slot] - rs[i].axes[w.slot]) as f64 / d_ang;
-        let ref_angle = (rc[i] + f * d_ang).rem_euclid(360_000.0);
-        let mut delta = (angle_mdeg as f64 - ref_angle).rem_euclid(360_000.0);
+        let ref_angle = super::reference::rem_turn(rc[i] + f * d_ang);
+        let mut delta = super::reference::rem_turn(angle_mdeg as f64 - ref_angle);
         if delta > 180_000.0 {
             delta -= 360_000.0;
         }

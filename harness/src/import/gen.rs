@@ -172,7 +172,7 @@ impl GenJsonl {
                 alarms: 0,
                 blocks: 1,
             };
-            w.write_event(&TraceEvent { t_us: self.rows * 1000, event: Event::End(end) });
+            w.write_event(&TraceEvent { t_us: self.rows * 1000, event: Event::End(Box::new(end)) });
             self.ended = true;
         }
         self.buf = w.finish().unwrap_or_default();

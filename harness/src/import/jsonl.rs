@@ -419,7 +419,7 @@ impl JsonlSource {
                         a.iter().map(|x| x.as_str().map(str::to_string)).collect::<Option<Vec<_>>>()
                     })
                     .ok_or_else(|| l.err("modal", format!("`modal` is {mv}"), "an array of strings"))?;
-                Event::End(EndSummary {
+                Event::End(Box::new(EndSummary {
                     reason,
                     state,
                     command,
@@ -427,7 +427,7 @@ impl JsonlSource {
                     modal,
                     alarms: l.u32("alarms", l.get("alarms"))?,
                     blocks: l.u32("blocks", l.get("blocks"))?,
-                })
+                }))
             }
             "meta" => return Err(l.err("kind", "a second meta line", "one meta line, the first")),
             other => {

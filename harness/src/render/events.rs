@@ -104,7 +104,7 @@ mod tests {
                 ev(1_234_567, Event::Alarm(Alarm::new(AlarmKind::AxisMoveAfterM29, "Z moved").at(4, None))),
                 ev(
                     12_345_678_901,
-                    Event::End(EndSummary {
+                    Event::End(Box::new(EndSummary {
                         reason: EndReason::ProgramEnd,
                         state,
                         command: [0; 6],
@@ -112,7 +112,7 @@ mod tests {
                         modal: vec![],
                         alarms: 1,
                         blocks: 7,
-                    }),
+                    })),
                 ),
             ],
         };

@@ -450,7 +450,7 @@ mod tests {
     fn end(x_mm: i64) -> Event {
         let mut state = Sample::default();
         state.axes[0] = x_mm * 1_000_000;
-        Event::End(EndSummary {
+        Event::End(Box::new(EndSummary {
             reason: EndReason::ProgramEnd,
             state,
             command: [0; 6],
@@ -458,7 +458,7 @@ mod tests {
             modal: vec![],
             alarms: 0,
             blocks: 0,
-        })
+        }))
     }
 
     fn sig(signal: Signal, value: bool) -> Event {

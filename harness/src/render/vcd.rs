@@ -318,7 +318,7 @@ mod tests {
                 ev(2000, Event::Sample(s1)),
                 ev(
                     2500,
-                    Event::End(EndSummary {
+                    Event::End(Box::new(EndSummary {
                         reason: EndReason::ProgramEnd,
                         state: s1,
                         command: [0; 6],
@@ -326,7 +326,7 @@ mod tests {
                         modal: vec![],
                         alarms: 0,
                         blocks: 1,
-                    }),
+                    })),
                 ),
             ],
         }
