@@ -1,0 +1,155 @@
+//! The reference's second pass ([`super::survey::Survey`]: key points and the spans of the
+//! synchronised moves) read in its first ([`super::survey::Skeleton`]), so that the engine runs
+//! once less before the comparison starts.
+//!
+//! The second pass needs what the first finds: the tap (over the whole run) and the plan's
+//! spans. Here the spans are read from their opening, as the planner lists them
+//! (`sync::Planner::edges`), and the key points with the tap guessed from the first stroke (the
+//! events before it waiting, a bounded number). At the end the guess and the spans are checked
+//! against the run's tap and plan: when either differs, or the plan has lead blocks, nothing is
+//! given and the second pass is run as before. What is given is what the second pass gives
+//! (test `a_fused_survey_reads_as_the_second_pass`).
+
+use nc_engine::trace::{Event, Sample, TraceEvent, TraceMeta};
+
+use super::keypoints::{KeyPoints, KeyTracker};
+use super::reference::Tap;
+use super::survey::{held, track_spans, Span, TapFinder};
+use super::sync::{Plan, SpanEdge};
+
+/// Most events kept waiting for the tap's guess (about 80 bytes each).
+const MAX_WAITING: usize = 1 << 16;
+
+/// The second pass, read alongside the first.
+#[derive(Default)]
+pub(super) struct Fused {
+    /// The tap guessed from the first stroke, once guessed (`Some(None)`: guessed, no tap).
+    guess: Option<Option<Tap>>,
+    keys: Option<KeyTracker>,
+    /// Samples and signals read before the guess.
+    waiting: Vec<(i64, Event)>,
+    /// The spans in the order they opened, the end `i64::MAX` while open.
+    spans: Vec<(i64, i64)>,
+    out: Vec<Span>,
+    /// The spans in the order they closed (the plan's).
+    closed: Vec<usize>,
+    /// The open stroke and the open phase's move.
+    open: [Option<usize>; 2],
+    active: Vec<(usize, Option<Sample>)>,
+    prev: Option<(i64, Sample)>,
+}
+
+fn axes(meta: &Option<TraceMeta>) -> &[nc_engine::trace::AxisSpec] {
+    meta.as_ref().map(|m| m.axes.as_slice()).unwrap_or(&[])
+}
+
+impl Fused {
+    /// A discrete event, after the first pass read it (`edges`: the spans it opened or closed).
+    /// False: given up.
+    pub(super) fn event(
+        &mut self,
+        ev: &TraceEvent,
+        edges: &[SpanEdge],
+        tap: &TapFinder,
+        meta: &Option<TraceMeta>,
+    ) -> bool {
+        for e in edges {
+            if e.open {
+                let i = self.spans.len();
+                self.spans.push((e.t, i64::MAX));
+                self.out.push(Span::default());
+                // A sample at the opening's time read before it is the span's first.
+                let first = self.prev.filter(|p| p.0 >= e.t).map(|p| p.1);
+                self.active.push((i, first));
+                self.open[e.which] = Some(i);
+            } else if let Some(i) = self.open[e.which].take() {
+                self.spans[i].1 = e.t;
+                self.closed.push(i);
+            }
+        }
+        if matches!(ev.event, Event::Signal { .. }) {
+            return self.keys_event(ev.t_us as i64, &ev.event, tap, meta);
+        }
+        true
+    }
+
+    /// A sample, after the first pass read it. False: given up.
+    pub(super) fn sample(&mut self, t: i64, s: &Sample, tap: &TapFinder, meta: &Option<TraceMeta>) -> bool {
+        if !self.active.is_empty() {
+            track_spans(&mut self.active, &self.spans, &mut self.out, &self.prev, t, s);
+        }
+        self.prev = Some((t, *s));
+        if let Some(k) = &mut self.keys {
+            k.event(t, &Event::Sample(*s));
+            return true;
+        }
+        self.keys_event(t, &Event::Sample(*s), tap, meta)
+    }
+
+    fn keys_event(&mut self, t: i64, ev: &Event, tap: &TapFinder, meta: &Option<TraceMeta>) -> bool {
+        if let Some(k) = &mut self.keys {
+            k.event(t, ev);
+            return true;
+        }
+        self.waiting.push((t, ev.clone()));
+        if tap.between_strokes() {
+            if let Some(g) = tap.finish(axes(meta)) {
+                self.start_keys(Some(g));
+            }
+        }
+        self.waiting.len() <= MAX_WAITING
+    }
+
+    fn start_keys(&mut self, tap: Option<Tap>) {
+        let mut k = KeyTracker::new(tap);
+        for (t, e) in std::mem::take(&mut self.waiting) {
+            k.event(t, &e);
+        }
+        self.guess = Some(tap);
+        self.keys = Some(k);
+    }
+
+    /// The key points and the plan's spans (its order), as the second pass reads them for the
+    /// run's tap `tap` and `plan`; `None` when they cannot be given.
+    pub(super) fn finish(mut self, tap: Option<Tap>, plan: &Plan) -> Option<(KeyPoints, Vec<Span>)> {
+        if !plan.lead.is_empty() {
+            return None;
+        }
+        if self.keys.is_none() {
+            self.start_keys(tap);
+        }
+        let same = |a: &Option<Tap>, b: &Option<Tap>| match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => (a.slot, a.into_sign, a.in_signal) == (b.slot, b.into_sign, b.in_signal),
+            _ => false,
+        };
+        if !same(&self.guess?, &tap) {
+            return None;
+        }
+        // Spans still open end with the run (after every sample: their end is never passed).
+        for w in [1, 0] {
+            if let Some(i) = self.open[w].take() {
+                self.closed.push(i);
+            }
+        }
+        let last = self.prev.map(|p| held(&p.1));
+        if self.closed.len() != plan.spans.len() {
+            return None;
+        }
+        let mut spans = Vec::with_capacity(self.closed.len());
+        for (&i, &(t0, t1)) in self.closed.iter().zip(&plan.spans) {
+            let (a, b) = self.spans[i];
+            if a != t0 || (b != t1 && b != i64::MAX) {
+                return None;
+            }
+            let mut o = std::mem::take(&mut self.out[i]);
+            for e in &mut o.ends {
+                if e.is_none() {
+                    *e = last;
+                }
+            }
+            spans.push(o);
+        }
+        Some((self.keys?.finish(), spans))
+    }
+}
