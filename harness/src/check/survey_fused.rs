@@ -153,3 +153,83 @@ impl Fused {
         Some((self.keys?.finish(), spans))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::check::survey::{Skeleton, Source, Survey};
+    use nc_engine::{Machine, RunOptions};
+
+    /// The first pass's key points and spans against the second pass's (the oracle) for the same
+    /// run: `None` when the first pass could not give them.
+    fn fused_and_second(dialect: &str, text: &str) -> Option<bool> {
+        let m = Machine::new(dialect).unwrap();
+        let p = m.parse(text).unwrap();
+        let run = |sink: &mut dyn nc_engine::trace::TraceSink| m.run(&p, &RunOptions::default(), sink);
+        let mut sk = Skeleton::of_lean(Source::Run(&run), true);
+        let tap = sk.tap();
+        let plan = sk.plan();
+        let axes = sk.meta.as_ref().unwrap().axes.clone();
+        let fused = sk.fused_survey(tap, &plan)?;
+        let mut sv = Survey::new(tap, plan.spans.clone(), plan.lead.clone(), &axes);
+        Source::Run(&run).replay(&mut sv);
+        let (keys, spans, _) = sv.finish();
+        assert_eq!(fused.0, keys, "{dialect}: key points");
+        assert_eq!(format!("{:?}", fused.1), format!("{spans:?}"), "{dialect}: spans");
+        Some(!spans.is_empty() && !keys.segments.is_empty())
+    }
+
+    /// Read in the first pass, the key points and the synchronised moves' spans are the second
+    /// pass's: rigid holes (Fanuc), a LinuxCNC G33 thread and G33.1 tap, a GSK thread by phase.
+    #[test]
+    fn a_fused_survey_reads_as_the_second_pass() {
+        let holes = crate::check::holes::program(5);
+        let cases = [
+            ("fanuc-mill", holes.as_str(), true),
+            ("linuxcnc", "G18 G21 M3 S600\nG4 P0.5\nG0 X10 Z5\nG33 Z-20 K1.5\nG0 X12\nM2\n", false),
+            ("linuxcnc", "G21 G90 G0 X0 Y0 Z5\nM3 S500\nG33.1 Z-10 K1.25\nG0 Z20\nM2\n", false),
+            (
+                "gsk-lathe",
+                "G0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\nG0 X60;\nM30;\n",
+                false,
+            ),
+        ];
+        for (dialect, text, tapped) in cases {
+            let r = fused_and_second(dialect, text);
+            assert!(r.is_some(), "{dialect}: not read in the first pass");
+            if tapped {
+                assert_eq!(r, Some(true), "{dialect}: no stroke read");
+            }
+        }
+    }
+
+    /// Thread blocks found by their lead (KND G32 without phases) are left to the second pass.
+    #[test]
+    fn lead_blocks_are_left_to_the_second_pass() {
+        let knd = "G00 X30 Z5;\nM03 S600;\nG32 Z-20 F2;\nG00 X40;\nZ5;\nG92 X28 Z-20 F2;\nX27;\nM30;\n";
+        assert_eq!(fused_and_second("knd-lathe", knd), None);
+    }
+
+    /// A first stroke along another axis than the run's tap (one short hole in G18, along Y,
+    /// then deep ones in G17, along Z): the guess is not the run's tap, and the second pass reads the key points.
+    #[test]
+    fn a_wrong_guess_is_left_to_the_second_pass() {
+        let text = "G90 G00 X0 Y10 Z10\nG18\nM29 S2000\nG99 G84 X0 Y8 Z0 R9 F3000\nG80\nG17 G00 Z10\n\
+                    M29 S2000\nG99 G84 X0 Y0 Z-20 R1 F3000\nX5\nX10\nG80\nM30\n";
+        let m = Machine::new("fanuc-mill").unwrap();
+        let p = m.parse(text).unwrap();
+        let run = |sink: &mut dyn nc_engine::trace::TraceSink| m.run(&p, &RunOptions::default(), sink);
+        let sk = Skeleton::of_lean(Source::Run(&run), true);
+        assert_eq!(sk.tap().map(|t| t.slot), Some(2), "the run's tap is Z");
+        assert_eq!(fused_and_second("fanuc-mill", text), None);
+    }
+
+    /// More events than are kept waiting before the first stroke (a 70 s dwell at 1 ms): left
+    /// to the second pass, memory bounded.
+    #[test]
+    fn a_long_wait_for_the_first_stroke_is_left_to_the_second_pass() {
+        let text = "G90 G00 X0 Y0 Z10\nG04 X70.\nM29 S2000\nG99 G84 X0 Y0 Z-5 R1 F3000\nG80\nM30\n";
+        assert_eq!(fused_and_second("fanuc-mill", text), None);
+        let short = "G90 G00 X0 Y0 Z10\nG04 X2.\nM29 S2000\nG99 G84 X0 Y0 Z-5 R1 F3000\nG80\nM30\n";
+        assert_eq!(fused_and_second("fanuc-mill", short), Some(true));
+    }
+}
