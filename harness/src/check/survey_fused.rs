@@ -133,23 +133,26 @@ impl Fused {
             }
         }
         let last = self.prev.map(|p| held(&p.1));
-        if self.closed.len() != plan.spans.len() {
+        if self.closed.len() != plan.spans.len() || self.out.len() != plan.spans.len() {
             return None;
         }
-        let mut spans = Vec::with_capacity(self.closed.len());
         for (&i, &(t0, t1)) in self.closed.iter().zip(&plan.spans) {
             let (a, b) = self.spans[i];
             if a != t0 || (b != t1 && b != i64::MAX) {
                 return None;
             }
-            let mut o = std::mem::take(&mut self.out[i]);
-            for e in &mut o.ends {
+            for e in &mut self.out[i].ends {
                 if e.is_none() {
                     *e = last;
                 }
             }
-            spans.push(o);
         }
+        // In the plan's order: mostly that of their openings already (kept in place: memory).
+        let spans = if self.closed.iter().enumerate().all(|(k, &i)| k == i) {
+            self.out
+        } else {
+            self.closed.iter().map(|&i| std::mem::take(&mut self.out[i])).collect()
+        };
         Some((self.keys?.finish(), spans))
     }
 }
