@@ -67,14 +67,18 @@ pub struct Skeleton {
     planner: Option<super::sync::Planner>,
     first: Option<Sample>,
     tap: TapFinder,
-    /// The second pass, read alongside this one (`None`: not tried, or given up).
+    /// The second pass read in this one (`None`: not tried, or given up).
     fused: Option<Box<super::survey_fused::Fused>>,
 }
 
 impl TraceSink for Skeleton {
     fn start(&mut self, meta: &TraceMeta) {
         self.meta = Some(meta.clone());
-        self.planner = Some(super::sync::Planner::new(meta.dialect));
+        let mut planner = super::sync::Planner::new(meta.dialect);
+        if self.fused.is_some() {
+            planner.edges = Some(Vec::new());
+        }
+        self.planner = Some(planner);
     }
     fn event(&mut self, ev: &TraceEvent) {
         self.total += 1;
@@ -89,6 +93,11 @@ impl TraceSink for Skeleton {
                     *m |= s.axes[k] != f.axes[k];
                 }
                 self.tap.sample(t, s);
+                if let Some(f) = &mut self.fused {
+                    if !f.sample(t, s, &self.tap, &self.meta) {
+                        self.fused = None;
+                    }
+                }
             }
             e => {
                 match e {
@@ -99,7 +108,18 @@ impl TraceSink for Skeleton {
                     }
                     _ => {}
                 }
-                self.planner.get_or_insert_with(Default::default).event(ev);
+                let planner = self.planner.get_or_insert_with(Default::default);
+                planner.event(ev);
+                if let Some(f) = &mut self.fused {
+                    let edges = planner.edges.as_mut().map(std::mem::take).unwrap_or_default();
+                    if !f.event(ev, &edges, &self.tap, &self.meta) {
+                        self.fused = None;
+                    }
+                    if let Some(e) = planner.edges.as_mut() {
+                        *e = edges;
+                        e.clear();
+                    }
+                }
                 if !(self.lean && matches!(e, Event::Phase(_) | Event::Block { .. } | Event::Input { .. })) {
                     self.events.push(ev.clone());
                 }
@@ -111,24 +131,16 @@ impl TraceSink for Skeleton {
 impl Skeleton {
     /// The first pass over `source`.
     pub fn of(source: Source) -> Skeleton {
-        Skeleton::of_lean(source, false)
+        let mut sk = Skeleton { fused: Some(Box::default()), ..Skeleton::default() };
+        source.replay(&mut sk);
+        sk
     }
 
     /// [`Skeleton::of`], without keeping the phases, blocks and inputs among [`Skeleton::events`]
     /// when `lean` (a comparison without temporal rules: memory, about half the events).
     pub fn of_lean(source: Source, lean: bool) -> Skeleton {
-        let mut sk = Skeleton { lean, ..Skeleton::default() };
-        // The second pass on a thread of its own, alongside (`survey_fused`).
-        let fused = std::thread::scope(|sc| {
-            let second = sc.spawn(move || {
-                let mut a = super::survey_fused::Alongside::default();
-                source.replay(&mut a);
-                a.fused
-            });
-            source.replay(&mut sk);
-            second.join().ok().flatten()
-        });
-        sk.fused = fused.map(Box::new);
+        let mut sk = Skeleton { lean, fused: Some(Box::default()), ..Skeleton::default() };
+        source.replay(&mut sk);
         sk
     }
 
@@ -165,7 +177,7 @@ impl Skeleton {
     }
 
     /// What the second pass ([`Survey`]) would give for `plan` (the key points and the plan's
-    /// spans), read alongside this one; `None` when it could not be (the tap guessed from the first
+    /// spans), read in this one; `None` when it could not be (the tap guessed from the first
     /// stroke was not the run's, the plan has lead blocks, or too many events came before the
     /// first stroke): the second pass is then needed.
     pub fn fused_survey(
@@ -236,7 +248,7 @@ pub(super) struct TapFinder {
 }
 
 impl TapFinder {
-    pub(super) fn signal(&mut self, signal: Signal, value: bool) {
+    fn signal(&mut self, signal: Signal, value: bool) {
         if matches!(signal, Signal::Rgspp | Signal::Rgspm) && value {
             self.first.get_or_insert(signal);
             self.open = false; // every stroke is its own segment
@@ -244,7 +256,7 @@ impl TapFinder {
         self.sig.set(signal, value);
     }
 
-    pub(super) fn sample(&mut self, t: i64, s: &Sample) {
+    fn sample(&mut self, t: i64, s: &Sample) {
         if !(self.sig.get(Signal::Rgspp) || self.sig.get(Signal::Rgspm)) {
             self.open = false;
             return;

@@ -1,24 +1,21 @@
 //! The reference's second pass ([`super::survey::Survey`]: key points and the spans of the
-//! synchronised moves) read alongside its first ([`super::survey::Skeleton`]), on a thread of its
-//! own ([`Alongside`]), so that the two engine runs before the comparison take the time of one
-//! when the second core is free (it is idle then: the recording's parsing waits for the
-//! comparison).
+//! synchronised moves) read in its first ([`super::survey::Skeleton`]), so that the engine runs
+//! once less before the comparison starts.
 //!
 //! The second pass needs what the first finds: the tap (over the whole run) and the plan's
 //! spans. Here the spans are read from their opening, as the planner lists them
 //! (`sync::Planner::edges`), and the key points with the tap guessed from the first stroke (the
-//! events before it waiting, a bounded number); the tap finder and the planner are the first
-//! pass's code, run again on this side. At the end the guess and the spans are checked against
-//! the first pass's tap and plan: when either differs, or the plan has lead blocks, nothing is
+//! events before it waiting, a bounded number). At the end the guess and the spans are checked
+//! against the run's tap and plan: when either differs, or the plan has lead blocks, nothing is
 //! given and the second pass is run as before. What is given is what the second pass gives
 //! (test `a_fused_survey_reads_as_the_second_pass`).
 
-use nc_engine::trace::{Event, Sample, TraceEvent, TraceMeta, TraceSink};
+use nc_engine::trace::{Event, Sample, TraceEvent, TraceMeta};
 
 use super::keypoints::{KeyPoints, KeyTracker};
 use super::reference::Tap;
 use super::survey::{held, track_spans, Span, TapFinder};
-use super::sync::{Plan, Planner, SpanEdge};
+use super::sync::{Plan, SpanEdge};
 
 /// Most events kept waiting for the tap's guess (about 80 bytes each).
 const MAX_WAITING: usize = 1 << 16;
@@ -40,64 +37,6 @@ pub(super) struct Fused {
     open: [Option<usize>; 2],
     active: Vec<(usize, Option<Sample>)>,
     prev: Option<(i64, Sample)>,
-}
-
-/// The second pass read alongside the first, on a thread of its own: it finds the tap's guess
-/// and the plan's openings as the first pass finds the tap and the plan (the same code).
-pub(super) struct Alongside {
-    tap: TapFinder,
-    planner: Option<Planner>,
-    meta: Option<TraceMeta>,
-    /// `None`: given up.
-    pub(super) fused: Option<Fused>,
-}
-
-impl Default for Alongside {
-    fn default() -> Self {
-        Alongside { tap: TapFinder::default(), planner: None, meta: None, fused: Some(Fused::default()) }
-    }
-}
-
-impl TraceSink for Alongside {
-    fn start(&mut self, meta: &TraceMeta) {
-        self.meta = Some(meta.clone());
-        let mut p = Planner::new(meta.dialect);
-        p.edges = Some(Vec::new());
-        self.planner = Some(p);
-    }
-
-    fn event(&mut self, ev: &TraceEvent) {
-        let Some(f) = &mut self.fused else { return };
-        let t = ev.t_us as i64;
-        let going = match &ev.event {
-            Event::Sample(s) => {
-                self.tap.sample(t, s);
-                f.sample(t, s, &self.tap, &self.meta)
-            }
-            e => {
-                if let Event::Signal { signal, value } = e {
-                    self.tap.signal(*signal, *value);
-                }
-                let planner = self.planner.get_or_insert_with(|| {
-                    let mut p = Planner::default();
-                    p.edges = Some(Vec::new());
-                    p
-                });
-                planner.event(ev);
-                let edges = planner.edges.get_or_insert_with(Vec::new);
-                let going = f.event(ev, edges, &self.tap, &self.meta);
-                edges.clear();
-                going
-            }
-        };
-        if !going {
-            self.fused = None;
-        }
-    }
-
-    fn wants_stop(&self) -> bool {
-        self.fused.is_none()
-    }
 }
 
 fn axes(meta: &Option<TraceMeta>) -> &[nc_engine::trace::AxisSpec] {
