@@ -88,9 +88,13 @@ impl TraceSink for Skeleton {
                 let t = ev.t_us as i64;
                 self.last_sample_t = Some(t);
                 self.spindle_turns |= s.spindle_mrpm != 0;
-                let f = *self.first.get_or_insert(*s);
+                let f = self.first.get_or_insert(*s);
+                // Axis by axis, an axis known to move not read again: read whole (16-byte
+                // loads), the sample the engine has just written stalls (store forwarding).
                 for (k, m) in self.moves.iter_mut().enumerate() {
-                    *m |= s.axes[k] != f.axes[k];
+                    if !*m && s.axes[k] != f.axes[k] {
+                        *m = true;
+                    }
                 }
                 self.tap.sample(t, s);
                 if let Some(f) = &mut self.fused {
