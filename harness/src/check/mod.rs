@@ -27,6 +27,7 @@ pub mod reference;
 pub mod report;
 pub mod shift;
 pub mod survey;
+mod survey_fused;
 pub mod sync;
 pub mod tolerance;
 pub mod window;

@@ -322,11 +322,20 @@ impl<'a> Reference<'a> {
                 .retain(|e| !matches!(e.event, Event::Phase(_) | Event::Block { .. } | Event::Input { .. }));
             trace.events.shrink_to_fit();
         }
-        // The survey takes the plan's intervals (the windows are built from `plan.raw`).
-        let (spans, lead) = (std::mem::take(&mut plan.spans), std::mem::take(&mut plan.lead));
-        let mut sv = Survey::new(tap, spans, lead, &trace.meta.axes);
-        source.replay(&mut sv);
-        let (keys, spans, parts) = sv.finish();
+        // The second pass, read in the first when it could be; else run now (it takes the
+        // plan's intervals: the windows are built from `plan.raw`).
+        let (keys, spans, parts) = match sk.fused_survey(tap, &plan) {
+            Some((keys, spans)) => {
+                plan.spans = Vec::new();
+                (keys, spans, Vec::new())
+            }
+            None => {
+                let (spans, lead) = (std::mem::take(&mut plan.spans), std::mem::take(&mut plan.lead));
+                let mut sv = Survey::new(tap, spans, lead, &trace.meta.axes);
+                source.replay(&mut sv);
+                sv.finish()
+            }
+        };
         let sync = super::sync::build(plan, spans, parts, tap, &trace.meta.axes);
         Reference {
             trace,

@@ -67,12 +67,18 @@ pub struct Skeleton {
     planner: Option<super::sync::Planner>,
     first: Option<Sample>,
     tap: TapFinder,
+    /// The second pass read in this one (`None`: not tried, or given up).
+    fused: Option<Box<super::survey_fused::Fused>>,
 }
 
 impl TraceSink for Skeleton {
     fn start(&mut self, meta: &TraceMeta) {
         self.meta = Some(meta.clone());
-        self.planner = Some(super::sync::Planner::new(meta.dialect));
+        let mut planner = super::sync::Planner::new(meta.dialect);
+        if self.fused.is_some() {
+            planner.edges = Some(Vec::new());
+        }
+        self.planner = Some(planner);
     }
     fn event(&mut self, ev: &TraceEvent) {
         self.total += 1;
@@ -82,11 +88,20 @@ impl TraceSink for Skeleton {
                 let t = ev.t_us as i64;
                 self.last_sample_t = Some(t);
                 self.spindle_turns |= s.spindle_mrpm != 0;
-                let f = *self.first.get_or_insert(*s);
+                let f = self.first.get_or_insert(*s);
+                // Axis by axis, an axis known to move not read again: read whole (16-byte
+                // loads), the sample the engine has just written stalls (store forwarding).
                 for (k, m) in self.moves.iter_mut().enumerate() {
-                    *m |= s.axes[k] != f.axes[k];
+                    if !*m && s.axes[k] != f.axes[k] {
+                        *m = true;
+                    }
                 }
                 self.tap.sample(t, s);
+                if let Some(f) = &mut self.fused {
+                    if !f.sample(t, s, &self.tap, &self.meta) {
+                        self.fused = None;
+                    }
+                }
             }
             e => {
                 match e {
@@ -97,7 +112,18 @@ impl TraceSink for Skeleton {
                     }
                     _ => {}
                 }
-                self.planner.get_or_insert_with(Default::default).event(ev);
+                let planner = self.planner.get_or_insert_with(Default::default);
+                planner.event(ev);
+                if let Some(f) = &mut self.fused {
+                    let edges = planner.edges.as_mut().map(std::mem::take).unwrap_or_default();
+                    if !f.event(ev, &edges, &self.tap, &self.meta) {
+                        self.fused = None;
+                    }
+                    if let Some(e) = planner.edges.as_mut() {
+                        *e = edges;
+                        e.clear();
+                    }
+                }
                 if !(self.lean && matches!(e, Event::Phase(_) | Event::Block { .. } | Event::Input { .. })) {
                     self.events.push(ev.clone());
                 }
@@ -109,7 +135,7 @@ impl TraceSink for Skeleton {
 impl Skeleton {
     /// The first pass over `source`.
     pub fn of(source: Source) -> Skeleton {
-        let mut sk = Skeleton::default();
+        let mut sk = Skeleton { fused: Some(Box::default()), ..Skeleton::default() };
         source.replay(&mut sk);
         sk
     }
@@ -117,7 +143,7 @@ impl Skeleton {
     /// [`Skeleton::of`], without keeping the phases, blocks and inputs among [`Skeleton::events`]
     /// when `lean` (a comparison without temporal rules: memory, about half the events).
     pub fn of_lean(source: Source, lean: bool) -> Skeleton {
-        let mut sk = Skeleton { lean, ..Skeleton::default() };
+        let mut sk = Skeleton { lean, fused: Some(Box::default()), ..Skeleton::default() };
         source.replay(&mut sk);
         sk
     }
@@ -152,6 +178,18 @@ impl Skeleton {
             }),
             events: std::mem::take(&mut self.events),
         }
+    }
+
+    /// What the second pass ([`Survey`]) would give for `plan` (the key points and the plan's
+    /// spans), read in this one; `None` when it could not be (the tap guessed from the first
+    /// stroke was not the run's, the plan has lead blocks, or too many events came before the
+    /// first stroke): the second pass is then needed.
+    pub fn fused_survey(
+        &mut self,
+        tap: Option<Tap>,
+        plan: &super::sync::Plan,
+    ) -> Option<(KeyPoints, Vec<Span>)> {
+        self.fused.take()?.finish(tap, plan)
     }
 
     /// The tap axis: the axis that travels furthest while RGSPP or RGSPM is on; its lead from the
@@ -202,7 +240,7 @@ impl LeadSums {
 
 /// Finds the tap while the run streams by (see [`Skeleton::tap`]).
 #[derive(Default)]
-struct TapFinder {
+pub(super) struct TapFinder {
     sig: Signals,
     first: Option<Signal>,
     /// The segment being read.
@@ -243,7 +281,12 @@ impl TapFinder {
         seg.last = (t, *s);
     }
 
-    fn finish(&self, axes: &[nc_engine::trace::AxisSpec]) -> Option<Tap> {
+    /// A stroke was read and the tap finder is not inside one now.
+    pub(super) fn between_strokes(&self) -> bool {
+        self.seg.is_some() && !self.open
+    }
+
+    pub(super) fn finish(&self, axes: &[nc_engine::trace::AxisSpec]) -> Option<Tap> {
         let in_signal = self.first?;
         let travel = self.travel;
         let slot = (0..AXES).max_by_key(|&a| travel[a])?;
@@ -341,7 +384,42 @@ fn interp(p: &(i64, Sample), n: (i64, &Sample), t: i64) -> [f64; AXES] {
     out
 }
 
-fn held(s: &Sample) -> [f64; AXES] {
+/// The sample `s` at `t` read into the spans `active` (each with its last sample within it) of
+/// `spans`, their figures in `out`; `prev` is the sample before. A span leaves `active` at the
+/// first sample past its end.
+pub(super) fn track_spans(
+    active: &mut Vec<(usize, Option<Sample>)>,
+    spans: &[(i64, i64)],
+    out: &mut [Span],
+    prev: &Option<(i64, Sample)>,
+    t: i64,
+    s: &Sample,
+) {
+    active.retain_mut(|(i, in_span)| {
+        let i = *i;
+        let (t0, t1) = spans[i];
+        let o = &mut out[i];
+        for (k, tk) in [t0, t1].into_iter().enumerate() {
+            if o.ends[k].is_none() && t > tk {
+                o.ends[k] = Some(match prev {
+                    Some(p) => interp(p, (t, s), tk),
+                    None => held(s),
+                });
+            }
+        }
+        if t0 <= t && t <= t1 {
+            if let Some(p) = in_span {
+                for (a, tr) in o.travel.iter_mut().enumerate() {
+                    *tr += (s.axes[a] - p.axes[a]).abs();
+                }
+            }
+            *in_span = Some(*s);
+        }
+        t <= t1
+    });
+}
+
+pub(super) fn held(s: &Sample) -> [f64; AXES] {
     let mut out = [0.0; AXES];
     for (k, o) in out.iter_mut().enumerate() {
         *o = s.axes[k] as f64;
@@ -383,30 +461,7 @@ impl Survey {
             self.active.push((self.order[self.next], None));
             self.next += 1;
         }
-        let prev = self.prev;
-        let (spans, out) = (&self.spans, &mut self.out);
-        self.active.retain_mut(|(i, in_span)| {
-            let i = *i;
-            let (t0, t1) = spans[i];
-            let o = &mut out[i];
-            for (k, tk) in [t0, t1].into_iter().enumerate() {
-                if o.ends[k].is_none() && t > tk {
-                    o.ends[k] = Some(match &prev {
-                        Some(p) => interp(p, (t, s), tk),
-                        None => held(s),
-                    });
-                }
-            }
-            if t0 <= t && t <= t1 {
-                if let Some(p) = in_span {
-                    for (a, tr) in o.travel.iter_mut().enumerate() {
-                        *tr += (s.axes[a] - p.axes[a]).abs();
-                    }
-                }
-                *in_span = Some(*s);
-            }
-            t <= t1
-        });
+        track_spans(&mut self.active, &self.spans, &mut self.out, &self.prev, t, s);
         // Spans that start after the first sample but whose ends come before it cannot occur
         // (they are activated at their start); a span starting before the first sample gets
         // the first sample held for its start (above, `prev` None).

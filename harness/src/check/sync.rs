@@ -190,6 +190,19 @@ pub struct Planner {
     /// The motion codes of the blocks read at one instant: a structure (a LinuxCNC loop, a
     /// subroutine call) is read at once, and its steps run after its last line was read.
     batch: (i64, Vec<String>),
+    /// The fixed intervals' openings and closings as they are read (`Some`: listed), for a
+    /// survey read in the same pass (`survey_fused`).
+    pub(crate) edges: Option<Vec<SpanEdge>>,
+}
+
+/// A fixed interval of the plan opened (`open`) or closed at `t`: `which` 0 a rigid stroke, 1 a
+/// phase's synchronised move (at most one of each is open at once). The closings come in the
+/// order of [`Plan::spans`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SpanEdge {
+    pub which: usize,
+    pub open: bool,
+    pub t: i64,
 }
 
 impl Default for Planner {
@@ -218,6 +231,13 @@ impl Planner {
             phased: false,
             feed: None,
             batch: (i64::MIN, Vec::new()),
+            edges: None,
+        }
+    }
+
+    fn edge(&mut self, which: usize, open: bool, t: i64) {
+        if let Some(e) = &mut self.edges {
+            e.push(SpanEdge { which, open, t });
         }
     }
 
@@ -234,10 +254,14 @@ impl Planner {
                 self.sig.set(*signal, *value);
                 let on = self.sig.get(Signal::Rgspp) || self.sig.get(Signal::Rgspm);
                 match (on, self.stroke_from) {
-                    (true, None) => self.stroke_from = Some(t),
+                    (true, None) => {
+                        self.stroke_from = Some(t);
+                        self.edge(0, true, t);
+                    }
                     (false, Some(a)) => {
                         self.raw.push(Raw::Fixed(a, t, Kind::Stroke, false, None));
                         self.stroke_from = None;
+                        self.edge(0, false, t);
                     }
                     _ => {}
                 }
@@ -272,12 +296,14 @@ impl Planner {
             {
                 if let Some((a, k, l, g)) = self.open.take() {
                     self.raw.push(Raw::Fixed(a, t, k, l, g));
+                    self.edge(1, false, t);
                 }
             }
             Event::Phase(p) => {
                 self.phased = true;
                 if let Some((a, k, l, g)) = self.open.take() {
                     self.raw.push(Raw::Fixed(a, t, k, l, g));
+                    self.edge(1, false, t);
                 }
                 let mut c = self.code.as_deref().unwrap_or("");
                 // A phase of a synchronised move read within a structure whose last line is
@@ -304,6 +330,9 @@ impl Planner {
                     None
                 };
                 self.open = kind.map(|(k, l)| (t, k, l, g));
+                if self.open.is_some() {
+                    self.edge(1, true, t);
+                }
             }
             _ => {}
         }
