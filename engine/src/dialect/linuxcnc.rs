@@ -78,6 +78,7 @@ impl Dialect for Linuxcnc {
         c.coordinated_rapid = true;
         c.feed_waits_at_speed = true;
         c.spindle_override_at_once = true;
+        c.index_latency_periods = 1;
         c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {

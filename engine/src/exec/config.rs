@@ -78,6 +78,12 @@ pub struct PlantConfig {
     /// scales the commanded speed in every servo period). False: it acts from the next speed
     /// command (COM-MOT-06).
     pub spindle_override_at_once: bool,
+    /// Servo periods between the spindle's index pulse and the first period of a move started
+    /// on it, after the one the pulse falls in: 0, the next period (the reference's own); 1
+    /// (LinuxCNC: the encoder clears `spindle.N.index-enable` after motion has run, and motion
+    /// copies the pin into its status after its planner has run, so the planner sees the index
+    /// in the second period after it; tp.c tpCheckAtSpeed, control.c; DEC-157).
+    pub index_latency_periods: u32,
     /// The PLC ladder.
     pub plc: PlcConfig,
     /// The override switches' ranges and steps.

@@ -32,12 +32,14 @@ impl Exec<'_> {
                 }
                 if f.index {
                     // Wait for the spindle's next index pulse (angle 0 in its direction of
-                    // rotation); the cut starts on the tick after it.
+                    // rotation); the cut starts on the tick after it, later by the control's
+                    // index latency (LinuxCNC: one period more, DEC-157).
                     let next =
                         if rpm > 0.0 { (angle / 360.0).ceil() } else { (angle / 360.0).floor() } * 360.0;
                     let dt = ((next - angle).abs() / (rpm.abs() * super::spindle::DEG_PER_US_PER_RPM)).ceil();
                     if dt > 0.0 {
-                        let at = ceil_to(now + dt as Micros, period.max(1));
+                        let latency = period.max(1) * Micros::from(self.cfg.index_latency_periods);
+                        let at = ceil_to(now + dt as Micros, period.max(1)) + latency;
                         self.steps.push_front(Step::Follow(Follow { index: false, ..f }));
                         self.active = Active::Until(at);
                         return;

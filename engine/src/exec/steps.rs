@@ -27,10 +27,13 @@ impl Exec<'_> {
             self.read_block();
             return;
         };
+        // The step a feed hold puts back to carry the move on after cycle start (an
+        // unsynchronised follow too: LinuxCNC's G33.1 move back, DEC-157).
         if matches!(
             step,
             Step::Rapid { .. } | Step::Feed { .. } | Step::Arc { .. } | Step::Tap(_) | Step::Thread(_)
-        ) {
+        ) || matches!(&step, Step::Follow(f) if f.kind == crate::plan::FollowKind::Unsynced)
+        {
             self.motion_step = Some(step.clone());
         }
         self.start_step(step);

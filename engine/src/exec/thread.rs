@@ -111,7 +111,10 @@ impl Exec<'_> {
         }
         // Revolutions since the start angle (index + phase − the catch-up's lag), in the sense
         // the spindle turns, signed: within half a turn either side.
-        let turned = angle * rpm.signum() / 360.0 - p.phase_rev + lag_rev;
+        // The control's index latency (LinuxCNC: one period more, DEC-157) puts the start that
+        // long after the start angle.
+        let latency_rev = (self.cfg.index_latency_periods as f64) * period as f64 * rev_us;
+        let turned = angle * rpm.signum() / 360.0 - p.phase_rev + lag_rev - latency_rev;
         let past = turned - turned.floor();
         let n0 = if past > 0.5 { past - 1.0 } else { past };
         if n0.abs() > rev_us * 0.5 + 1e-9 && !tracking {

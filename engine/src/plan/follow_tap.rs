@@ -98,6 +98,11 @@ pub fn follow_tap(c: &FollowTap, out: &mut Vec<Step>) {
         out.push(follow(c.start, FollowKind::Through { rpm: c.rpm, forward: !c.forward }, c.overshoot));
         out.push(Step::FunctionWithMotion { letter: 'M', code, effect });
         out.push(follow(c.start.saturating_sub(dir * c.allowance_nm), FollowKind::Reversal, c.overshoot));
+        // The move back is no longer synchronised (tp.c FINAL_REVERSAL clears the segment's
+        // `synchronized`), so a feed hold acts in it: one pending since the tap began holds it
+        // before it starts, one given during it stops it at the axis' acceleration; cycle start
+        // carries it on (tpGetFeedScale pauses unsynchronised segments only; DEC-157).
+        out.push(Step::HoldSuppress(false));
         out.push(follow(c.start, FollowKind::Unsynced, c.overshoot));
         out.push(Step::AwaitFunction);
     } else {

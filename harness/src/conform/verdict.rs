@@ -11,7 +11,7 @@ use super::ControllerError;
 use crate::check::{self, CheckSpec, Tolerances};
 use crate::scenario::expect;
 use crate::scenario::load::Scenario;
-use crate::scenario::timeline::ms;
+use crate::scenario::timeline::{ms, Slack};
 
 /// One thing the controller got wrong.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -145,14 +145,16 @@ pub fn judge(s: &Scenario, driven: &Driven, reference: &Trace, tolerances: &Tole
         }),
         (Driven::Ran(trace), None) => {
             // The expectations are exact on the reference, within the comparison's tolerances on
-            // a controller (it quantises): its values within them of the reference's are read as
-            // the reference's (DEC-122).
-            let quantised = if trace.events == reference.events {
-                None
+            // a controller (it quantises, and its events fall a servo period from the
+            // reference's): its values within them of the reference's at the same time are read
+            // as the reference's (DEC-122), and the expected values are met within them (DEC-156).
+            let (quantised, slack) = if trace.events == reference.events {
+                (None, Slack::EXACT)
             } else {
-                Some(snap(trace, reference, tolerances))
+                (Some(snap(trace, reference, tolerances)), slack(tolerances))
             };
-            for v in expect::evaluate(&s.expect, quantised.as_ref().unwrap_or(trace))
+            let within = if slack == Slack::EXACT { String::new() } else { describe(&slack) };
+            for v in expect::evaluate_within(&s.expect, quantised.as_ref().unwrap_or(trace), &slack)
                 .into_iter()
                 .filter(|v| !v.pass)
             {
@@ -160,7 +162,7 @@ pub fn judge(s: &Scenario, driven: &Driven, reference: &Trace, tolerances: &Tole
                 failures.push(Failure {
                     rule: v.rule.clone(),
                     by: "expect".into(),
-                    text: format!("{}{at}: expected {}; actual {}", v.what, v.expected, v.actual),
+                    text: format!("{}{at}: expected {}{within}; actual {}", v.what, v.expected, v.actual),
                 });
             }
             let spec = CheckSpec {
@@ -291,6 +293,23 @@ pub fn snap(trace: &Trace, reference: &Trace, tol: &Tolerances) -> Trace {
         }
     }
     out
+}
+
+/// How far from the expected values a controller's values may lie (DEC-156): positions
+/// `keypoint_mm`, the spindle speed `speed_rpm`, its angle [`ANGLE_MDEG`], the tolerances under
+/// which [`snap`] reads a value as the reference's.
+pub fn slack(tol: &Tolerances) -> Slack {
+    Slack {
+        position_nm: crate::check::tolerance::mm_nm(tol.keypoint_mm).max(0),
+        speed_mrpm: (tol.speed_rpm.max(0.0) * 1000.0).round() as i64,
+        angle_mdeg: ANGLE_MDEG,
+    }
+}
+
+/// ` (within 0.02 mm, 5 rpm, 0.5°)`: the slack as the failure text gives it.
+fn describe(s: &Slack) -> String {
+    let f = crate::scenario::timeline::fixed;
+    format!(" (within {} mm, {} rpm, {}°)", f(s.position_nm, 6), f(s.speed_mrpm, 3), f(s.angle_mdeg, 3))
 }
 
 /// The spindle angle tolerance of expectations on a controller, milli-degrees (0.5°).

@@ -30,7 +30,7 @@ use serde_saphyr::Spanned;
 use super::resolve::{mm_to_nm, ms_to_us, Ctx};
 use super::schema::{self, Compare, StateSpec};
 use super::timeline::{
-    describe_condition, fixed, ms, show, Cmp, Departure, Item, Obs, State, Timeline, Unit,
+    describe_condition, fixed, ms, show, Cmp, Departure, Item, Obs, Slack, State, Timeline, Unit,
 };
 use crate::diag::{InputError, Span};
 
@@ -489,6 +489,17 @@ pub fn resolve(ctx: &Ctx, e: &schema::Expect, default_rule: &str) -> Result<Expe
 /// check, one per property of each temporal rule (one per axis of `still`, per signal of
 /// `never_rises`), one per `reached`.
 pub fn evaluate(exp: &Expectations, trace: &Trace) -> Vec<Verdict> {
+    evaluate_within(exp, trace, &Slack::EXACT)
+}
+
+/// [`evaluate`] with the values expected met within `slack`: what `conform` holds a controller's
+/// trace to (DEC-156). Exact values and bounds of `checks`, `end.state`, `holds` and `reached`
+/// states within `slack` of what they expect; `still` and `never_beyond` within `slack` of the
+/// window's first sampled value; `spindle_still` within the speed and angle slack. Windows
+/// (`while`), `during` and conditions (`when`, `after`), which say where to look, stay exact, as
+/// do signals, phases, alarms and the end's reason and modal codes; times have their own
+/// `tolerance_ms`.
+pub fn evaluate_within(exp: &Expectations, trace: &Trace, slack: &Slack) -> Vec<Verdict> {
     let tl = Timeline::new(trace);
     let mut out = Vec::new();
     let v = |rule: &str, what: String, pass: bool, t_us: Option<u64>, expected: String, actual: String| {
@@ -499,11 +510,11 @@ pub fn evaluate(exp: &Expectations, trace: &Trace) -> Vec<Verdict> {
         out.push(v(&exp.default_rule, "alarms".into(), pass, t, e, act));
     }
     if let Some(end) = &exp.end {
-        let (pass, t, e, act) = eval_end(end, &tl);
+        let (pass, t, e, act) = eval_end(end, &tl, slack);
         out.push(v(&exp.default_rule, "end".into(), pass, t, e, act));
     }
     for (k, c) in exp.checks.iter().enumerate() {
-        let (pass, t, e, act) = eval_check(c, &tl);
+        let (pass, t, e, act) = eval_check(c, &tl, slack);
         out.push(v(&c.rule, format!("check #{}", k + 1), pass, t, e, act));
     }
     for (k, a) in exp.always.iter().enumerate() {
@@ -522,14 +533,14 @@ pub fn evaluate(exp: &Expectations, trace: &Trace) -> Vec<Verdict> {
                 );
                 (false, None, e, "window never opened".to_string())
             } else {
-                let (pass, t, e, act) = eval_property(p, &stretches, &tl);
+                let (pass, t, e, act) = eval_property(p, &stretches, &tl, slack);
                 (pass, t, format!("{e}{wdesc}"), act)
             };
             out.push(v(&a.rule, what, pass, t, e, act));
         }
     }
     for (k, r) in exp.reached.iter().enumerate() {
-        let (pass, t, e, act) = eval_reached(r, &tl);
+        let (pass, t, e, act) = eval_reached(r, &tl, slack);
         out.push(v(&r.rule, format!("reached #{}", k + 1), pass, t, e, act));
     }
     out
@@ -628,7 +639,7 @@ fn eval_alarms(exp: &[AlarmExp], trace: &Trace) -> Outcome {
     (first_bad.is_none(), t, expected, shown)
 }
 
-fn eval_end(exp: &EndExp, tl: &Timeline) -> Outcome {
+fn eval_end(exp: &EndExp, tl: &Timeline, slack: &Slack) -> Outcome {
     let (Some(end), Some(t_end)) = (tl.end(), tl.end_time()) else {
         return (false, None, "an end summary".into(), "the trace has no end".into());
     };
@@ -653,14 +664,14 @@ fn eval_end(exp: &EndExp, tl: &Timeline) -> Outcome {
     if !exp.state.0.is_empty() {
         let phase = tl.len().checked_sub(1).map_or(Phase::Idle, |i| tl.phase(i));
         let o = Obs { signals: end.signals, phase, sample: Some(&end.state), command: Some(&end.command) };
-        pass &= exp.state.holds(&o);
+        pass &= exp.state.holds_within(&o, slack);
         e.push(exp.state.describe());
         a.push(exp.state.actual(&o));
     }
     (pass, Some(t_end), e.join(", "), a.join(", "))
 }
 
-fn eval_check(c: &CheckExp, tl: &Timeline) -> Outcome {
+fn eval_check(c: &CheckExp, tl: &Timeline, slack: &Slack) -> Outcome {
     let (t, when) = match &c.moment {
         Moment::At(t) => (Some(*t), format!("at {}", ms(*t))),
         Moment::When(cond) => (cond.time(tl), format!("when {}", cond.desc)),
@@ -676,7 +687,7 @@ fn eval_check(c: &CheckExp, tl: &Timeline) -> Outcome {
         return (false, Some(t), expected, "nothing recorded yet".into());
     };
     let o = tl.obs(i);
-    (c.state.holds(&o), Some(t), expected, c.state.actual(&o))
+    (c.state.holds_within(&o, slack), Some(t), expected, c.state.actual(&o))
 }
 
 /// The window as stretches of consecutive instants.
@@ -701,7 +712,7 @@ fn label(p: &Property) -> String {
     }
 }
 
-fn eval_property(p: &Property, stretches: &[Range<usize>], tl: &Timeline) -> Outcome {
+fn eval_property(p: &Property, stretches: &[Range<usize>], tl: &Timeline, slack: &Slack) -> Outcome {
     let start = Some(tl.t_us(stretches[0].start));
     let instants: usize = stretches.iter().map(|r| r.len()).sum();
     let held = format!("held at all {instants} instants of the window");
@@ -710,20 +721,21 @@ fn eval_property(p: &Property, stretches: &[Range<usize>], tl: &Timeline) -> Out
         Property::Holds(s) => {
             for i in stretches.iter().flat_map(|r| r.clone()) {
                 let o = tl.obs(i);
-                if !s.holds(&o) {
+                if !s.holds_within(&o, slack) {
                     return (false, Some(tl.t_us(i)), s.describe(), s.actual(&o));
                 }
             }
             (true, start, s.describe(), held)
         }
         Property::Still(ax) | Property::NeverBeyond { axis: ax, .. } => {
-            let (op, how, bad): (_, _, fn(Nm, Nm) -> bool) = match p {
-                Property::NeverBeyond { down: true, .. } => (">=", "not below", |b, v| v < b),
-                Property::NeverBeyond { .. } => ("<=", "not above", |b, v| v > b),
-                _ => ("=", "still", |b, v| v != b),
+            let (op, how, bad): (_, _, fn(Nm, Nm, Nm) -> bool) = match p {
+                Property::NeverBeyond { down: true, .. } => (">=", "not below", |b, v, s| v < b - s),
+                Property::NeverBeyond { .. } => ("<=", "not above", |b, v, s| v > b + s),
+                _ => ("=", "still", |b, v, s| v.abs_diff(b) > s as u64),
             };
             let name = ax.letter;
-            match tl.first_departure(stretches, |s| s.axes[ax.slot], bad) {
+            let s = slack.position_nm.max(0);
+            match tl.first_departure(stretches, |x| x.axes[ax.slot], |b, v| bad(b, v, s)) {
                 Departure::At { t0, base, t, value } => {
                     let e = format!("{name} {op} {} ({how} since {})", show(base, ax.unit), ms(t0));
                     (false, Some(t), e, format!("{name} = {}", show(value, ax.unit)))
@@ -734,7 +746,12 @@ fn eval_property(p: &Property, stretches: &[Range<usize>], tl: &Timeline) -> Out
         }
         Property::SpindleStill => {
             let read = |s: &Sample| (s.spindle_mrpm, s.spindle_mdeg);
-            match tl.first_departure(stretches, read, |b, v| v.0 != 0 || v.1 != b.1) {
+            let (rpm, deg) = (slack.speed_mrpm.max(0), slack.angle_mdeg.max(0));
+            let turned = |b: i64, v: i64| {
+                let d = (v - b).rem_euclid(360_000);
+                d.min(360_000 - d)
+            };
+            match tl.first_departure(stretches, read, |b, v| v.0.abs() > rpm || turned(b.1, v.1) > deg) {
                 Departure::At { t0, base, t, value } => {
                     let e = format!("rpm 0, angle {} deg (since {})", fixed(base.1, 3), ms(t0));
                     (false, Some(t), e, format!("rpm {}, angle {} deg", fixed(value.0, 3), fixed(value.1, 3)))
@@ -756,7 +773,7 @@ fn eval_property(p: &Property, stretches: &[Range<usize>], tl: &Timeline) -> Out
     }
 }
 
-fn eval_reached(r: &ReachedExp, tl: &Timeline) -> Outcome {
+fn eval_reached(r: &ReachedExp, tl: &Timeline, slack: &Slack) -> Outcome {
     let during = |o: &Obs| r.during.as_ref().is_none_or(|d| d.holds(o));
     let dsuffix = r.during.as_ref().map_or(String::new(), |d| format!(" while {}", d.describe()));
     match &r.target {
@@ -764,7 +781,7 @@ fn eval_reached(r: &ReachedExp, tl: &Timeline) -> Outcome {
             let expected = format!("{} at some instant{dsuffix}", s.describe());
             for i in 0..tl.len() {
                 let o = tl.obs(i);
-                if s.holds(&o) && during(&o) {
+                if s.holds_within(&o, slack) && during(&o) {
                     return (true, Some(tl.t_us(i)), expected, s.actual(&o));
                 }
             }

@@ -504,6 +504,26 @@ impl Cmp {
         }
     }
 
+    /// Whether `x` satisfies the comparison within `slack` of its values (an exact value within
+    /// `slack`, at least 1 unit; each bound moved outwards by `slack`): a controller's value is
+    /// judged within the documented tolerance of the expected value (DEC-156).
+    pub fn test_within(&self, x: i64, slack: i64) -> bool {
+        let s = slack.max(0);
+        match *self {
+            Cmp::Exact(v) => x.abs_diff(v) <= s.max(1) as u64,
+            Cmp::Bounds { below, above, min, max } => {
+                let widen = |b: Option<i64>, by: i64| b.map(|b| b.saturating_add(by));
+                Cmp::Bounds {
+                    below: widen(below, s),
+                    above: widen(above, -s),
+                    min: widen(min, -s),
+                    max: widen(max, s),
+                }
+                .test(x)
+            }
+        }
+    }
+
     /// `Z = -12.5 mm`, `Z >= 3 mm, Z < 5 mm`, `rpm 1000`.
     pub fn describe(&self, name: &str, unit: Unit) -> String {
         let eq = if unit == Unit::Rpm { " " } else { " = " };
@@ -577,6 +597,16 @@ impl Item {
         }
     }
 
+    /// Whether it holds in `o` with positions within `slack.position_nm` and the spindle speed
+    /// within `slack.speed_mrpm` of the expected values; signals and phases exact.
+    pub fn holds_within(&self, o: &Obs, slack: &Slack) -> bool {
+        match self {
+            Item::Axis { cmp, .. } => self.value(o).is_some_and(|v| cmp.test_within(v, slack.position_nm)),
+            Item::Rpm(cmp) => self.value(o).is_some_and(|v| cmp.test_within(v, slack.speed_mrpm)),
+            _ => self.holds(o),
+        }
+    }
+
     /// What it expects, with units.
     pub fn expected(&self) -> String {
         match self {
@@ -602,6 +632,23 @@ impl Item {
     }
 }
 
+/// How far from an expected value a value may lie and still meet it. The reference is held to
+/// [`Slack::EXACT`]; under `conform` a controller to the comparison's tolerances (DEC-156).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Slack {
+    /// Positions, nm (nano-degrees on rotary axes).
+    pub position_nm: i64,
+    /// Spindle speed, milli-rpm.
+    pub speed_mrpm: i64,
+    /// Spindle angle, milli-degrees (`spindle_still`).
+    pub angle_mdeg: i64,
+}
+
+impl Slack {
+    /// Exact: an exact value within 1 unit, bounds as written, `still` unchanged.
+    pub const EXACT: Slack = Slack { position_nm: 0, speed_mrpm: 0, angle_mdeg: 0 };
+}
+
 /// A state pattern: values that must hold together.
 #[derive(Debug, Clone, Default)]
 pub struct State(pub Vec<Item>);
@@ -610,6 +657,10 @@ impl State {
     /// Whether every item holds in `o`.
     pub fn holds(&self, o: &Obs) -> bool {
         self.0.iter().all(|i| i.holds(o))
+    }
+    /// Whether every item holds in `o` within `slack` ([`Item::holds_within`]).
+    pub fn holds_within(&self, o: &Obs, slack: &Slack) -> bool {
+        self.0.iter().all(|i| i.holds_within(o, slack))
     }
     /// The items expected, `, `-separated.
     pub fn describe(&self) -> String {
