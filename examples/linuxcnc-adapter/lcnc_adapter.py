@@ -235,6 +235,9 @@ class Adapter:
                     self.leads[g["input"]["name"]] = (g["cycle"] - g["sent"]) * P
         info = {"event": "run", "run": sc.runs, "seconds": round(time.monotonic() - t, 2),
                 "end": res["end"]["reason"], "events": len(events), "inputs": late}
+        if res.get("t0") is not None:
+            # the agent's time 0 (the inputs' times count from it) after the trace's: inputs late by it
+            info["t0_late_us"] = (res["t0"] - tr.t0) * P
         log(json.dumps(info))
         self.record(info)
         return {"events": [parse_raw(e) for e in events], "inputs": late}

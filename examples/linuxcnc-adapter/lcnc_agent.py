@@ -24,6 +24,7 @@ import time
 
 import hal
 import linuxcnc
+from lcnc_step import Stepper
 
 c = linuxcnc.command()
 s = linuxcnc.stat()
@@ -243,7 +244,7 @@ class Run:
         self.states = []
         self.given = []
         self.single_block = False
-        self.step_taken = None
+        self.stepper = Stepper()
         self.commanders = COMMANDERS
 
     def snapshot(self):
@@ -267,14 +268,32 @@ class Run:
         if name == "feed_hold":
             cmd = ("auto", linuxcnc.AUTO_PAUSE)
         elif name == "cycle_start":
-            if self.held() or s.task_paused:
-                cmd = ("auto", linuxcnc.AUTO_STEP if self.single_block else linuxcnc.AUTO_RESUME)
+            if self.single_block and self.stepper.stepping and not s.interp_state == linuxcnc.INTERP_PAUSED:
+                # the next line, once the line before stands done (a cycle start while it runs is
+                # not a second step: LinuxCNC would run on through the next line)
+                if self.held():
+                    cmd = ("auto", linuxcnc.AUTO_STEP)
+                    self.stepper.step(s.current_line)
+            elif self.held() or s.task_paused:
+                if self.single_block:
+                    cmd = ("auto", linuxcnc.AUTO_STEP)
+                    self.stepper.step(s.current_line)
+                else:
+                    cmd = ("auto", linuxcnc.AUTO_RESUME)
+                    self.stepper.stop()
         elif name == "reset":
             cmd = ("abort",)
         elif name == "single_block":
             self.single_block = bool(inp["on"])
-            if self.single_block and s.interp_state != linuxcnc.INTERP_IDLE and not s.paused:
+            running = s.interp_state in (linuxcnc.INTERP_READING, linuxcnc.INTERP_WAITING)
+            if self.single_block and running and not self.stepper.stepping:
+                # LinuxCNC's step while it runs: it stops once the current line is done
                 cmd = ("auto", linuxcnc.AUTO_STEP)
+                self.stepper.step(s.current_line)
+            elif not self.single_block and running and self.stepper.stepping and not self.held():
+                # off while a line runs: the program runs on (a resume ends LinuxCNC's stepping)
+                cmd = ("auto", linuxcnc.AUTO_RESUME)
+                self.stepper.stop()
         elif name == "optional_stop":
             cmd = ("set_optional_stop", 1 if inp["on"] else 0)
         elif name == "emergency_stop":
@@ -315,8 +334,6 @@ class Run:
                 )
                 if took:
                     g["cycle"] = self.clock.now()
-                    if g["input"]["name"] == "cycle_start" and self.single_block:
-                        self.step_taken = g["cycle"]
 
     def state(self):
         s.poll()
@@ -327,14 +344,9 @@ class Run:
 
     def held(self):
         """The program stands held (the SPL lamp): paused by feed hold or M0/M1 (the interpreter
-        paused, as halui's program.is-paused), or a single-block step done: after a step is
-        taken, once LinuxCNC's task is paused again with nothing left in motion's queue."""
-        now = self.clock.now()
-        if self.step_taken is not None:
-            if now >= self.step_taken + 2 and s.task_paused and s.queue == 0 and s.inpos:
-                self.step_taken = None
-                return True
-            return False
+        paused, as halui's program.is-paused), or, single-stepping, the step's line done."""
+        if self.stepper.stepping and s.interp_state != linuxcnc.INTERP_PAUSED:
+            return self.stepper.done(s, self.clock.now())
         return held()
 
     def run(self):
@@ -354,16 +366,28 @@ class Run:
         hal.set_p("sampler.0.enable", "1")
         time.sleep(0.01)
         before = self.snapshot()
-        c_run = clock.now()
         for p in [p for p in pending if p["t_us"] == 0 and p["input"]["name"] in early]:
             pending.remove(p)
-            why = self.give(p["input"], c_run, direct=True)
+            why = self.give(p["input"], clock.now(), direct=True)
             if why:
                 return self.finish(out, sampler, {"not_applicable": why})
         if self.single_block:
+            # LinuxCNC's first step from idle starts the program paused (emctaskmain.cc: a run,
+            # then emcTrajPause: no output yet); the second runs line 1 (the reference's single
+            # block runs the first block at once)
             c.auto(linuxcnc.AUTO_STEP)
+            c.wait_complete(1.0)
+            s.poll()
+            self.stepper.step(s.current_line)
+        # The command that starts the program goes out from a commander: the Python interface
+        # returns only once the task took it (~20 ms), and the program's first output, time 0 of
+        # the inputs' times, is seen from here by then (a time 0 taken 17 ms late gave every input
+        # 17 ms late: g84/overrides_and_feed_hold held 0.17 mm deep)
+        c_run = clock.now()
+        if self.single_block:
+            self.commanders.send(("auto", linuxcnc.AUTO_STEP))
         else:
-            c.auto(linuxcnc.AUTO_RUN, 0)
+            self.commanders.send(("auto", linuxcnc.AUTO_RUN, 0))
         wall0 = time.monotonic()
         wall_limit = req["time_limit_us"] / 1e6 * 3 + 30
         t0 = None

@@ -22,6 +22,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import lcnc_adapter  # noqa: E402
 import lcnc_machine  # noqa: E402
+import lcnc_step  # noqa: E402
 import lcnc_trace  # noqa: E402
 
 NC = os.environ.get("NC_CONFORM", "nc-conform")
@@ -518,6 +519,61 @@ class Conditions(unittest.TestCase):
         self.assertEqual(lcnc_adapter.Tracker({"block": 4}).see({"t_us": 5, "kind": "block", "line": 4, "text": ""}), 5)
         f = {"t_us": 9, "kind": "function", "letter": "M", "code": 3}
         self.assertEqual(lcnc_adapter.Tracker({"function": "M3"}).see(f), 9)
+
+
+class SingleBlock(unittest.TestCase):
+    """When a LinuxCNC step stands done. Oracle: LinuxCNC 2.9's own status while stepping
+    g331/single_block's program with AUTO_STEP (interp, exec state, motion queue, in position,
+    the task's current line; a row per change, at its ms)."""
+
+    # the second step (line 1: M3 S500) given at 444 ms, at line 0; the third (line 2: G0 Z5) at
+    # 866 ms, at line 2; the fourth (G33.1, with its index wait and reversal) at 1470 ms, at line 3
+    STEPS = [
+        (444, 0, [(445, 4, 5, 0, 1, 2)]),
+        (866, 2, [(867, 4, 7, 1, 0, 3), (1047, 4, 7, 0, 1, 3)]),
+        (1470, 3, [(1472, 4, 5, 1, 0, 4), (5443, 4, 5, 0, 1, 4)]),
+    ]
+
+    class St:
+        def __init__(self, interp, exec_state, queue, inpos, line):
+            self.interp_state, self.exec_state, self.queue, self.inpos, self.current_line = (
+                interp, exec_state, queue, inpos, line)
+
+    def held_from(self, stepper, rows, until):
+        """The first ms the stepper reports the step done, polling every ms through the rows."""
+        k, cur = 0, None
+        for ms in range(rows[0][0], until):
+            while k < len(rows) and rows[k][0] <= ms:
+                cur = self.St(*rows[k][1:])
+                k += 1
+            if stepper.done(cur, ms):
+                return ms
+        return None
+
+    def test_a_step_is_done_when_its_line_is_and_the_task_took_up_the_next(self):
+        for given, line, rows in self.STEPS:
+            st = lcnc_step.Stepper()
+            st.step(line)
+            # before LinuxCNC took the step: the line it stood at, motion at rest: not done
+            self.assertFalse(st.done(self.St(4, 5, 0, 1, line), given))
+            at = self.held_from(st, rows, rows[-1][0] + 10)
+            self.assertEqual(at, rows[-1][0] + st.settle, (given, rows))
+            self.assertTrue(st.done(self.St(4, 5, 0, 1, line + 1), at + 100))  # stays held
+
+    def test_a_wait_inside_the_line_is_not_a_step_done(self):
+        st = lcnc_step.Stepper()
+        st.step(3)
+        # G84's spindle reversal waits for motion with its queue empty, on the step's own line
+        self.assertIsNone(self.held_from(st, [(0, 4, 7, 0, 1, 3)], 200))
+        # a dwell (G84 P) on the next line's cycle stands still with the queue empty
+        self.assertIsNone(self.held_from(st, [(0, 4, 8, 0, 1, 4)], 200))
+        # the empty queue seen for less than the settling time, then motion again
+        self.assertIsNone(self.held_from(st, [(0, 4, 7, 0, 1, 4), (2, 4, 7, 1, 0, 4)], 200))
+
+    def test_the_program_end_is_a_step_done(self):
+        st = lcnc_step.Stepper()
+        st.step(4)
+        self.assertEqual(self.held_from(st, [(0, 4, 3, 0, 1, 4), (5, 1, 2, 0, 1, 4)], 50), 5 + st.settle)
 
 
 if __name__ == "__main__":
