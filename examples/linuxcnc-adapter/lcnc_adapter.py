@@ -187,6 +187,7 @@ class Adapter:
                         "lead_us": self.leads.get(i["input"]["name"], 2 * sc.cfg["period_us"])} for i in sc.inputs],
             "time_limit_us": sc.job["time_limit_us"], "auto_cycle_start": sc.job["auto_cycle_start"],
             "t0_lead": sc.t0_lead, "cfg": sc.cfg, "hold_ms": 500,
+            "first_line_acts": lcnc_trace.Program(sc.job["program"]).first_line_acts(),
             "budget_us": min(sc.job["time_limit_us"], int(self.args.max_run_s * 1e6)),
         }
         t = time.monotonic()

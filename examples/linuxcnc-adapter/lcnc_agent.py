@@ -245,6 +245,9 @@ class Run:
         self.given = []
         self.single_block = False
         self.stepper = Stepper()
+        self.before = None  # the outputs before the start
+        self.restep = False  # single block: line 1 changes an output, not seen yet after the start
+        self.restepped = None
         self.commanders = COMMANDERS
 
     def snapshot(self):
@@ -310,8 +313,10 @@ class Run:
         g = {"cycle": before, "sent": before, "due": cycle_due, "input": inp}
         if cmd is not None:
             if direct:
+                # before the start: on time whenever the task takes it (its latency is still
+                # measured, for the same input during the run)
                 getattr(c, cmd[0])(*cmd[1:])
-                g["cycle"] = self.clock.now()
+                g["cycle"] = g["due"] = self.clock.now()
             else:
                 g["echo"] = s.echo_serial_number
                 g["estop"] = name == "emergency_stop" and inp["on"]
@@ -346,7 +351,20 @@ class Run:
         """The program stands held (the SPL lamp): paused by feed hold or M0/M1 (the interpreter
         paused, as halui's program.is-paused), or, single-stepping, the step's line done."""
         if self.stepper.stepping and s.interp_state != linuxcnc.INTERP_PAUSED:
-            return self.stepper.done(s, self.clock.now())
+            done = self.stepper.done(s, self.clock.now())
+            if done and self.restep and self.snapshot() == self.before:
+                # the start's step ran no line: LinuxCNC's executor took up a command left from
+                # before the run (its status shows a line further on, waiting for motion and IO)
+                # and stood there, in some runs of a scenario, not in others; line 1, which
+                # changes an output, did not run: one more step runs it
+                self.restep = False
+                self.restepped = self.clock.now()
+                self.stepper.step(s.current_line)
+                self.commanders.send(("auto", linuxcnc.AUTO_STEP))
+                return False
+            if done:
+                self.restep = False
+            return done
         return held()
 
     def run(self):
@@ -365,7 +383,7 @@ class Run:
         early = {"feed_override", "spindle_override", "single_block", "optional_stop", "spindle_stall"}
         hal.set_p("sampler.0.enable", "1")
         time.sleep(0.01)
-        before = self.snapshot()
+        before = self.before = self.snapshot()
         for p in [p for p in pending if p["t_us"] == 0 and p["input"]["name"] in early]:
             pending.remove(p)
             why = self.give(p["input"], clock.now(), direct=True)
@@ -374,25 +392,30 @@ class Run:
         if self.single_block:
             # LinuxCNC's first step from idle starts the program paused (emctaskmain.cc: a run,
             # then emcTrajPause: no output yet); the second runs line 1 (the reference's single
-            # block runs the first block at once)
+            # block runs the first block at once). Both from here, the second 20 ms after the
+            # first was done: sent at once from a commander, it ran no line in every run of a
+            # scenario but its first (the task took up a stale command and stood).
             c.auto(linuxcnc.AUTO_STEP)
             c.wait_complete(1.0)
+            time.sleep(0.02)
             s.poll()
             self.stepper.step(s.current_line)
-        # The command that starts the program goes out from a commander: the Python interface
-        # returns only once the task took it (~20 ms), and the program's first output, time 0 of
-        # the inputs' times, is seen from here by then (a time 0 taken 17 ms late gave every input
-        # 17 ms late: g84/overrides_and_feed_hold held 0.17 mm deep)
-        c_run = clock.now()
-        if self.single_block:
-            self.commanders.send(("auto", linuxcnc.AUTO_STEP))
+            c_run = clock.now()
+            c.auto(linuxcnc.AUTO_STEP)
+            self.restep = bool(req.get("first_line_acts"))
         else:
+            # The run command goes out from a commander: the Python interface returns only once
+            # the task took it (~20 ms), and the program's first output, time 0 of the inputs'
+            # times, is seen from here by then (a time 0 taken 17 ms late gave every input 17 ms
+            # late: g84/overrides_and_feed_hold held 0.17 mm deep)
+            c_run = clock.now()
             self.commanders.send(("auto", linuxcnc.AUTO_RUN, 0))
         wall0 = time.monotonic()
         wall_limit = req["time_limit_us"] / 1e6 * 3 + 30
         t0 = None
         t0_guess = c_run + int(req.get("t0_lead", 2))
         last = None
+        looks = 0
         end = None
         limit_cycles = int(req["time_limit_us"] // self.period_us)
         budget_cycles = int(req.get("budget_us", req["time_limit_us"]) // self.period_us) + 1000 * int(per_ms)
@@ -401,6 +424,7 @@ class Run:
         reset_at = None
         last_pos, moved_at = None, c_run
         while end is None:
+            looks += 1
             now = clock.now()
             pos = (hal.get_value("Xpos"), hal.get_value("Ypos"), hal.get_value("Zpos"))
             if pos != last_pos:
@@ -413,7 +437,9 @@ class Run:
                 last = st
             errors(self.msgs, clock)
             if t0 is None and self.snapshot() != before:
-                t0 = now
+                # an output changed before the first look (the step given from here): at the
+                # run command + the lead an earlier run showed
+                t0 = now if looks > 1 else min(now, t0_guess)
             base = t0 if t0 is not None else t0_guess
             while pending:
                 p = pending[0]
@@ -469,7 +495,7 @@ class Run:
             time.sleep(0.0003)
         if end["reason"] in ("stopped", "time_limit", "alarm", "over_budget"):
             c.abort()
-        return self.finish(out, sampler, {"end": end, "t0": t0, "c_run": c_run})
+        return self.finish(out, sampler, {"end": end, "t0": t0, "c_run": c_run, "restepped": self.restepped})
 
     def settle(self, end):
         """After the program's end: record until the spindle stands and the axes are in position

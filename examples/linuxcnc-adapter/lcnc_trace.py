@@ -173,6 +173,15 @@ class Program:
     def text(self, line):
         return self.lines[line - 1].strip() if 0 < line <= len(self.lines) else ""
 
+    def first_line_acts(self):
+        """Whether the program's first block turns the spindle or coolant on or names an axis:
+        an output changes when LinuxCNC runs it (lcnc_agent's single-block start)."""
+        for line in range(1, len(self.lines) + 1):
+            if self.is_block(line):
+                ws = words(self.lines[line - 1])
+                return any(m in (3, 4, 7, 8) for m in self.m[line]) or any(l in "XYZ" for l, _ in ws)
+        return False
+
     def is_block(self, line):
         t = self.text(line)
         return bool(t) and not t.startswith(("(", ";", "%"))

@@ -570,6 +570,16 @@ class SingleBlock(unittest.TestCase):
         # the empty queue seen for less than the settling time, then motion again
         self.assertIsNone(self.held_from(st, [(0, 4, 7, 0, 1, 4), (2, 4, 7, 1, 0, 4)], 200))
 
+    def test_the_start_is_stepped_again_only_for_a_first_line_that_acts(self):
+        # the single-block start is stepped once more when line 1 should have changed an output
+        # and none changed (the scenarios' first lines: M3 S500, M3 S600 F600)
+        P = lcnc_trace.Program
+        self.assertTrue(P("G21 M3 S500\nG0 X0 Z5\nM2\n").first_line_acts())
+        self.assertTrue(P("(tap)\n\nG17 G21 G98 M3 S600 F600\nM2\n").first_line_acts())
+        self.assertTrue(P("G0 X10\nM2\n").first_line_acts())
+        self.assertFalse(P("G21 G90 S500\nM3\nM2\n").first_line_acts())
+        self.assertFalse(P("G18 G21 F100\nG0 X1\n").first_line_acts())
+
     def test_the_program_end_is_a_step_done(self):
         st = lcnc_step.Stepper()
         st.step(4)
