@@ -433,7 +433,8 @@ class Run:
             if st != last:
                 self.states.append({"cycle": now, "interp": st[0], "paused": st[1], "task": st[2], "exec": st[3],
                                     "motion_paused": st[4], "task_paused": st[5], "queue": st[6],
-                                    "line": s.current_line, "motion_line": s.motion_line})
+                                    "line": s.current_line, "motion_line": s.motion_line,
+                                    "step": bool(st[1] and self.stepper.held)})
                 last = st
             errors(self.msgs, clock)
             if t0 is None and self.snapshot() != before:

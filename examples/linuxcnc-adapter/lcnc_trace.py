@@ -357,6 +357,7 @@ class Trace:
                         # paused from here; SPL where the hold took effect (below), as the
                         # reference reports a hold
                         self.pause_pending = True
+                        self.step_done = bool(st.get("step"))
                         self.hold_at = self.hold_effect(st["cycle"], end_c)
                     else:
                         self.pause_pending = False
@@ -379,6 +380,10 @@ class Trace:
             self.row(prev, r, t)
             if getattr(self, "pause_pending", False) and self.hold_at is not None and c >= self.hold_at:
                 self.pause_pending = False
+                if getattr(self, "step_done", False) and self.cur is not None and self.prog.kind.get(self.cur):
+                    # a single-block step stands done: its line, a cycle, is over (the reference
+                    # ends the cycle's phases as the block ends)
+                    self.leave_cycle(t)
                 self.signal(t, "SPL", 1)
                 self.signal(t, "STL", 0)
             # ZSP: the spindle standing for plc.zsp_ms (it falls with a start command or motion)

@@ -230,6 +230,28 @@ class Recording(unittest.TestCase):
         m = [(e["t_us"], e["code"]) for e in ev if e["kind"] == "function" and e["letter"] == "M"]
         self.assertEqual([x for x in m if x[1] == 3], [(0, 3), (18000, 3)])
 
+    def test_a_single_block_step_ends_its_cycles_phases(self):
+        # I4: LinuxCNC's step through the G33.1 line stands done back at the start (the task took
+        # up the next line): the reference's block is over there (phase idle with SPL), while
+        # LinuxCNC's next line starts only after the cycle start
+        rows = self.rows()
+        for k in range(4):
+            rows.append(row(128 + k, z=2.3 + 0.05 * k, rpm=-30 + 20 * k, revs=1.1, cmd=500, on=1, fwd=1, line=3))
+        rows += [row(132 + k, z=2.5, rpm=30, revs=1.2, cmd=500, on=1, fwd=1, line=3) for k in range(10)]
+        agent = {"c_run": 105, "given": [], "messages": [],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 135, "interp": 4, "paused": True, "task": 4, "step": True}],
+                 "end": {"reason": "stopped", "cycle": 141}}
+        ev = lcnc_trace.Trace(self.PROGRAM, rows, agent, self.CFG, 1000).build()
+        phases = [(e["t_us"], e["name"]) for e in ev if e["kind"] == "phase"]
+        spl = [e["t_us"] for e in ev if e["kind"] == "signal" and e["name"] == "SPL" and e["value"] == 1]
+        self.assertEqual(spl, [25000])
+        self.assertEqual(phases[-1], (25000, "idle"))
+        # a feed hold's standstill (no step) leaves the phase as it was
+        agent["states"][1].pop("step")
+        ev = lcnc_trace.Trace(self.PROGRAM, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"][-1], "retract")
+
     def test_a_pause_is_reported_where_the_axes_stand_still(self):
         # the task reports paused at cycle 114 while the rapid still moves until 116
         rows = [row(c) for c in range(100, 110)]
