@@ -392,17 +392,17 @@ class Run:
         if self.single_block:
             # LinuxCNC's first step from idle starts the program paused (emctaskmain.cc: a run,
             # then emcTrajPause: no output yet); the second runs line 1 (the reference's single
-            # block runs the first block at once). Both from here, the second 20 ms after the
-            # first was done: sent at once from a commander, it ran no line in every run of a
-            # scenario but its first (the task took up a stale command and stood).
+            # block runs the first block at once), sent from a commander as the run command
+            # below. In some runs of a scenario, not in others, the second step ran no line (the
+            # task took up a stale command and stood): see `held`.
             c.auto(linuxcnc.AUTO_STEP)
             c.wait_complete(1.0)
             time.sleep(0.02)
             s.poll()
             self.stepper.step(s.current_line)
-            c_run = clock.now()
-            c.auto(linuxcnc.AUTO_STEP)
             self.restep = bool(req.get("first_line_acts"))
+            c_run = clock.now()
+            self.commanders.send(("auto", linuxcnc.AUTO_STEP))
         else:
             # The run command goes out from a commander: the Python interface returns only once
             # the task took it (~20 ms), and the program's first output, time 0 of the inputs'
