@@ -248,6 +248,7 @@ class Run:
         self.before = None  # the outputs before the start
         self.restep = False  # single block: line 1 changes an output, not seen yet after the start
         self.restepped = None
+        self.start_paused = False  # single block: the start's pause before line 1, not left yet
         self.commanders = COMMANDERS
 
     def snapshot(self):
@@ -350,6 +351,12 @@ class Run:
     def held(self):
         """The program stands held (the SPL lamp): paused by feed hold or M0/M1 (the interpreter
         paused, as halui's program.is-paused), or, single-stepping, the step's line done."""
+        if self.start_paused:
+            # the single-block start's step from idle pauses the program before line 1 (the
+            # reference's single block has no such stop): not held
+            if s.interp_state == linuxcnc.INTERP_PAUSED:
+                return False
+            self.start_paused = False
         if self.stepper.stepping and s.interp_state != linuxcnc.INTERP_PAUSED:
             done = self.stepper.done(s, self.clock.now())
             if done and self.restep and self.snapshot() == self.before:
@@ -401,6 +408,7 @@ class Run:
             s.poll()
             self.stepper.step(s.current_line)
             self.restep = bool(req.get("first_line_acts"))
+            self.start_paused = True
             c_run = clock.now()
             self.commanders.send(("auto", linuxcnc.AUTO_STEP))
         else:
