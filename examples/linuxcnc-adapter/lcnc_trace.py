@@ -41,6 +41,9 @@ COLUMNS = ["n", "X", "Y", "Z", "rpm", "revs", "speed_cmd", "clock", "on", "fwd",
 SIGNALS = ["MF", "SF", "TF", "FIN", "F76.3", "RGTAP", "SPPOS", "SPPOSA", "RGSPP", "RGSPM", "SPL", "STL",
            "ESP", "ZSP"]
 MOTION_TRAVERSE, MOTION_FEED = 1, 2
+# servo cycles between motion going on after a cycle start and the agent seeing the task's echo
+# of it (cycles/g81_feed_hold, adapter17-6: motion on at the cycle the echo was stamped)
+ACK_LAG_CYCLES = 5
 
 
 def dec(x, digits):
@@ -439,11 +442,16 @@ class Trace:
         if self.abort_sent is not None:
             ends.append(self.abort_sent)
         resume = min(ends + [end_c])
-        # the last row the machine stood in before it went on
+        # the last row the machine stood in before it went on: the agent stamps a cycle start
+        # when it sees the task's echo, up to a few servo cycles after motion went on
         upto = max((c for c in self.by_cycle if c <= resume), default=None)
         if upto is None:
             return None
-        since = self.standstill_from(upto)
+        since = None
+        for back in range(ACK_LAG_CYCLES + 1):
+            since = self.standstill_from(upto - back)
+            if since is not None:
+                break
         if since is None:
             return None
         return max(since, paused)

@@ -266,6 +266,23 @@ class Recording(unittest.TestCase):
         # not at the paused report (cycle 114, 4 ms) but at cycle 117, the first without motion
         self.assertEqual(spl, [7000])
 
+    def test_a_hold_is_reported_when_motion_went_on_before_the_cycle_start_was_stamped(self):
+        # cycles/g81_feed_hold (adapter17-6): Z stood from cycle 11733 to the cycle start, and
+        # moved again in the very cycle the agent stamped the cycle start taken: still a hold
+        rows = [row(c, z=2.0) for c in range(100, 110)]
+        for k, z in enumerate([1.99, 1.98, 1.975, 1.972, 1.971] + [1.97] * 10 + [1.969, 1.968]):
+            rows.append(row(110 + k, z=z, rpm=30, cmd=500, on=1, fwd=1, line=2, mtype=2))
+        agent = {"c_run": 105, "messages": [],
+                 "given": [{"cycle": 112, "sent": 111, "due": 112, "input": {"name": "feed_hold"}},
+                           {"cycle": 125, "sent": 121, "due": 122, "input": {"name": "cycle_start"}}],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 112, "interp": 3, "paused": True, "task": 4},
+                            {"cycle": 125, "interp": 2, "paused": False, "task": 4}],
+                 "end": {"reason": "time_limit", "cycle": 126, "settled": 126}}
+        ev = lcnc_trace.Trace("G21 M3 S500\nG1 Z-5 F60\nM2\n", rows, agent, self.CFG, 1000).build()
+        spl = [(e["t_us"], e["value"]) for e in ev if e["kind"] == "signal" and e["name"] == "SPL"]
+        self.assertEqual(spl, [(6000, 1), (15000, 0)])
+
     def test_a_pause_in_a_synchronised_move_is_reported_where_motion_holds(self):
         # I1: feed hold during a G33.1 at cycle 117: LinuxCNC runs the tap to its end (tp.c pauses
         # unsynchronised segments only); the tap stands still at its reversal (121-123) and holds
