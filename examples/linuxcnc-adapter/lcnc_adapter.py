@@ -187,6 +187,7 @@ class Adapter:
                         "lead_us": self.leads.get(i["input"]["name"], 2 * sc.cfg["period_us"])} for i in sc.inputs],
             "time_limit_us": sc.job["time_limit_us"], "auto_cycle_start": sc.job["auto_cycle_start"],
             "t0_lead": sc.t0_lead, "cfg": sc.cfg, "hold_ms": 500,
+            "first_line_acts": lcnc_trace.Program(sc.job["program"]).first_line_acts(),
             "budget_us": min(sc.job["time_limit_us"], int(self.args.max_run_s * 1e6)),
         }
         t = time.monotonic()
@@ -235,6 +236,9 @@ class Adapter:
                     self.leads[g["input"]["name"]] = (g["cycle"] - g["sent"]) * P
         info = {"event": "run", "run": sc.runs, "seconds": round(time.monotonic() - t, 2),
                 "end": res["end"]["reason"], "events": len(events), "inputs": late}
+        if res.get("t0") is not None:
+            # the agent's time 0 (the inputs' times count from it) after the trace's: inputs late by it
+            info["t0_late_us"] = (res["t0"] - tr.t0) * P
         log(json.dumps(info))
         self.record(info)
         return {"events": [parse_raw(e) for e in events], "inputs": late}

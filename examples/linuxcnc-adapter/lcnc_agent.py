@@ -24,6 +24,7 @@ import time
 
 import hal
 import linuxcnc
+from lcnc_step import Stepper
 
 c = linuxcnc.command()
 s = linuxcnc.stat()
@@ -243,7 +244,11 @@ class Run:
         self.states = []
         self.given = []
         self.single_block = False
-        self.step_taken = None
+        self.stepper = Stepper()
+        self.before = None  # the outputs before the start
+        self.restep = False  # single block: line 1 changes an output, not seen yet after the start
+        self.restepped = None
+        self.start_paused = False  # single block: the start's pause before line 1, not left yet
         self.commanders = COMMANDERS
 
     def snapshot(self):
@@ -267,14 +272,32 @@ class Run:
         if name == "feed_hold":
             cmd = ("auto", linuxcnc.AUTO_PAUSE)
         elif name == "cycle_start":
-            if self.held() or s.task_paused:
-                cmd = ("auto", linuxcnc.AUTO_STEP if self.single_block else linuxcnc.AUTO_RESUME)
+            if self.single_block and self.stepper.stepping and not s.interp_state == linuxcnc.INTERP_PAUSED:
+                # the next line, once the line before stands done (a cycle start while it runs is
+                # not a second step: LinuxCNC would run on through the next line)
+                if self.held():
+                    cmd = ("auto", linuxcnc.AUTO_STEP)
+                    self.stepper.step(s.current_line)
+            elif self.held() or s.task_paused:
+                if self.single_block:
+                    cmd = ("auto", linuxcnc.AUTO_STEP)
+                    self.stepper.step(s.current_line)
+                else:
+                    cmd = ("auto", linuxcnc.AUTO_RESUME)
+                    self.stepper.stop()
         elif name == "reset":
             cmd = ("abort",)
         elif name == "single_block":
             self.single_block = bool(inp["on"])
-            if self.single_block and s.interp_state != linuxcnc.INTERP_IDLE and not s.paused:
+            running = s.interp_state in (linuxcnc.INTERP_READING, linuxcnc.INTERP_WAITING)
+            if self.single_block and running and not self.stepper.stepping:
+                # LinuxCNC's step while it runs: it stops once the current line is done
                 cmd = ("auto", linuxcnc.AUTO_STEP)
+                self.stepper.step(s.current_line)
+            elif not self.single_block and running and self.stepper.stepping and not self.held():
+                # off while a line runs: the program runs on (a resume ends LinuxCNC's stepping)
+                cmd = ("auto", linuxcnc.AUTO_RESUME)
+                self.stepper.stop()
         elif name == "optional_stop":
             cmd = ("set_optional_stop", 1 if inp["on"] else 0)
         elif name == "emergency_stop":
@@ -291,8 +314,10 @@ class Run:
         g = {"cycle": before, "sent": before, "due": cycle_due, "input": inp}
         if cmd is not None:
             if direct:
+                # before the start: on time whenever the task takes it (its latency is still
+                # measured, for the same input during the run)
                 getattr(c, cmd[0])(*cmd[1:])
-                g["cycle"] = self.clock.now()
+                g["cycle"] = g["due"] = self.clock.now()
             else:
                 g["echo"] = s.echo_serial_number
                 g["estop"] = name == "emergency_stop" and inp["on"]
@@ -315,8 +340,6 @@ class Run:
                 )
                 if took:
                     g["cycle"] = self.clock.now()
-                    if g["input"]["name"] == "cycle_start" and self.single_block:
-                        self.step_taken = g["cycle"]
 
     def state(self):
         s.poll()
@@ -327,14 +350,28 @@ class Run:
 
     def held(self):
         """The program stands held (the SPL lamp): paused by feed hold or M0/M1 (the interpreter
-        paused, as halui's program.is-paused), or a single-block step done: after a step is
-        taken, once LinuxCNC's task is paused again with nothing left in motion's queue."""
-        now = self.clock.now()
-        if self.step_taken is not None:
-            if now >= self.step_taken + 2 and s.task_paused and s.queue == 0 and s.inpos:
-                self.step_taken = None
-                return True
-            return False
+        paused, as halui's program.is-paused), or, single-stepping, the step's line done."""
+        if self.start_paused:
+            # the single-block start's step from idle pauses the program before line 1 (the
+            # reference's single block has no such stop): not held
+            if s.interp_state == linuxcnc.INTERP_PAUSED:
+                return False
+            self.start_paused = False
+        if self.stepper.stepping and s.interp_state != linuxcnc.INTERP_PAUSED:
+            done = self.stepper.done(s, self.clock.now())
+            if done and self.restep and self.snapshot() == self.before:
+                # the start's step ran no line: LinuxCNC's executor took up a command left from
+                # before the run (its status shows a line further on, waiting for motion and IO)
+                # and stood there, in some runs of a scenario, not in others; line 1, which
+                # changes an output, did not run: one more step runs it
+                self.restep = False
+                self.restepped = self.clock.now()
+                self.stepper.step(s.current_line)
+                self.commanders.send(("auto", linuxcnc.AUTO_STEP))
+                return False
+            if done:
+                self.restep = False
+            return done
         return held()
 
     def run(self):
@@ -353,22 +390,40 @@ class Run:
         early = {"feed_override", "spindle_override", "single_block", "optional_stop", "spindle_stall"}
         hal.set_p("sampler.0.enable", "1")
         time.sleep(0.01)
-        before = self.snapshot()
-        c_run = clock.now()
+        before = self.before = self.snapshot()
         for p in [p for p in pending if p["t_us"] == 0 and p["input"]["name"] in early]:
             pending.remove(p)
-            why = self.give(p["input"], c_run, direct=True)
+            why = self.give(p["input"], clock.now(), direct=True)
             if why:
                 return self.finish(out, sampler, {"not_applicable": why})
         if self.single_block:
+            # LinuxCNC's first step from idle starts the program paused (emctaskmain.cc: a run,
+            # then emcTrajPause: no output yet); the second runs line 1 (the reference's single
+            # block runs the first block at once), sent from a commander as the run command
+            # below. In some runs of a scenario, not in others, the second step ran no line (the
+            # task took up a stale command and stood): see `held`.
             c.auto(linuxcnc.AUTO_STEP)
+            c.wait_complete(1.0)
+            time.sleep(0.02)
+            s.poll()
+            self.stepper.step(s.current_line)
+            self.restep = bool(req.get("first_line_acts"))
+            self.start_paused = True
+            c_run = clock.now()
+            self.commanders.send(("auto", linuxcnc.AUTO_STEP))
         else:
-            c.auto(linuxcnc.AUTO_RUN, 0)
+            # The run command goes out from a commander: the Python interface returns only once
+            # the task took it (~20 ms), and the program's first output, time 0 of the inputs'
+            # times, is seen from here by then (a time 0 taken 17 ms late gave every input 17 ms
+            # late: g84/overrides_and_feed_hold held 0.17 mm deep)
+            c_run = clock.now()
+            self.commanders.send(("auto", linuxcnc.AUTO_RUN, 0))
         wall0 = time.monotonic()
         wall_limit = req["time_limit_us"] / 1e6 * 3 + 30
         t0 = None
         t0_guess = c_run + int(req.get("t0_lead", 2))
         last = None
+        looks = 0
         end = None
         limit_cycles = int(req["time_limit_us"] // self.period_us)
         budget_cycles = int(req.get("budget_us", req["time_limit_us"]) // self.period_us) + 1000 * int(per_ms)
@@ -377,6 +432,7 @@ class Run:
         reset_at = None
         last_pos, moved_at = None, c_run
         while end is None:
+            looks += 1
             now = clock.now()
             pos = (hal.get_value("Xpos"), hal.get_value("Ypos"), hal.get_value("Zpos"))
             if pos != last_pos:
@@ -385,11 +441,14 @@ class Run:
             if st != last:
                 self.states.append({"cycle": now, "interp": st[0], "paused": st[1], "task": st[2], "exec": st[3],
                                     "motion_paused": st[4], "task_paused": st[5], "queue": st[6],
-                                    "line": s.current_line, "motion_line": s.motion_line})
+                                    "line": s.current_line, "motion_line": s.motion_line,
+                                    "step": bool(st[1] and self.stepper.held)})
                 last = st
             errors(self.msgs, clock)
             if t0 is None and self.snapshot() != before:
-                t0 = now
+                # an output changed before the first look (the step given from here): at the
+                # run command + the lead an earlier run showed
+                t0 = now if looks > 1 else min(now, t0_guess)
             base = t0 if t0 is not None else t0_guess
             while pending:
                 p = pending[0]
@@ -445,7 +504,7 @@ class Run:
             time.sleep(0.0003)
         if end["reason"] in ("stopped", "time_limit", "alarm", "over_budget"):
             c.abort()
-        return self.finish(out, sampler, {"end": end, "t0": t0, "c_run": c_run})
+        return self.finish(out, sampler, {"end": end, "t0": t0, "c_run": c_run, "restepped": self.restepped})
 
     def settle(self, end):
         """After the program's end: record until the spindle stands and the axes are in position

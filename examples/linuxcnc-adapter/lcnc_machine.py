@@ -308,7 +308,8 @@ class Instance:
         for name, text in (("machine.ini", ini), ("machine.hal", hal), ("machine.tbl", "T1 P1 D0 Z0 ;\n")):
             with open(os.path.join(self.dir, name), "w") as f:
                 f.write(text)
-        shutil.copy(os.path.join(HERE, "lcnc_agent.py"), os.path.join(self.dir, "lcnc_agent.py"))
+        for name in ("lcnc_agent.py", "lcnc_step.py"):
+            shutil.copy(os.path.join(HERE, name), os.path.join(self.dir, name))
         os.chmod(os.path.join(self.dir, "lcnc_agent.py"), 0o755)
         sock_path = os.path.join(self.dir, "agent.sock")
         self.server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)

@@ -41,6 +41,9 @@ COLUMNS = ["n", "X", "Y", "Z", "rpm", "revs", "speed_cmd", "clock", "on", "fwd",
 SIGNALS = ["MF", "SF", "TF", "FIN", "F76.3", "RGTAP", "SPPOS", "SPPOSA", "RGSPP", "RGSPM", "SPL", "STL",
            "ESP", "ZSP"]
 MOTION_TRAVERSE, MOTION_FEED = 1, 2
+# servo cycles between motion going on after a cycle start and the agent seeing the task's echo
+# of it (cycles/g81_feed_hold, adapter17-6: motion on at the cycle the echo was stamped)
+ACK_LAG_CYCLES = 5
 
 
 def dec(x, digits):
@@ -172,6 +175,15 @@ class Program:
 
     def text(self, line):
         return self.lines[line - 1].strip() if 0 < line <= len(self.lines) else ""
+
+    def first_line_acts(self):
+        """Whether the program's first block turns the spindle or coolant on or names an axis:
+        an output changes when LinuxCNC runs it (lcnc_agent's single-block start)."""
+        for line in range(1, len(self.lines) + 1):
+            if self.is_block(line):
+                ws = words(self.lines[line - 1])
+                return any(m in (3, 4, 7, 8) for m in self.m[line]) or any(l in "XYZ" for l, _ in ws)
+        return False
 
     def is_block(self, line):
         t = self.text(line)
@@ -348,6 +360,7 @@ class Trace:
                         # paused from here; SPL where the hold took effect (below), as the
                         # reference reports a hold
                         self.pause_pending = True
+                        self.step_done = bool(st.get("step"))
                         self.hold_at = self.hold_effect(st["cycle"], end_c)
                     else:
                         self.pause_pending = False
@@ -370,6 +383,10 @@ class Trace:
             self.row(prev, r, t)
             if getattr(self, "pause_pending", False) and self.hold_at is not None and c >= self.hold_at:
                 self.pause_pending = False
+                if getattr(self, "step_done", False) and self.cur is not None and self.prog.kind.get(self.cur):
+                    # a single-block step stands done: its line, a cycle, is over (the reference
+                    # ends the cycle's phases as the block ends)
+                    self.leave_cycle(t)
                 self.signal(t, "SPL", 1)
                 self.signal(t, "STL", 0)
             # ZSP: the spindle standing for plc.zsp_ms (it falls with a start command or motion)
@@ -425,11 +442,16 @@ class Trace:
         if self.abort_sent is not None:
             ends.append(self.abort_sent)
         resume = min(ends + [end_c])
-        # the last row the machine stood in before it went on
+        # the last row the machine stood in before it went on: the agent stamps a cycle start
+        # when it sees the task's echo, up to a few servo cycles after motion went on
         upto = max((c for c in self.by_cycle if c <= resume), default=None)
         if upto is None:
             return None
-        since = self.standstill_from(upto)
+        since = None
+        for back in range(ACK_LAG_CYCLES + 1):
+            since = self.standstill_from(upto - back)
+            if since is not None:
+                break
         if since is None:
             return None
         return max(since, paused)

@@ -22,6 +22,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import lcnc_adapter  # noqa: E402
 import lcnc_machine  # noqa: E402
+import lcnc_step  # noqa: E402
 import lcnc_trace  # noqa: E402
 
 NC = os.environ.get("NC_CONFORM", "nc-conform")
@@ -229,6 +230,28 @@ class Recording(unittest.TestCase):
         m = [(e["t_us"], e["code"]) for e in ev if e["kind"] == "function" and e["letter"] == "M"]
         self.assertEqual([x for x in m if x[1] == 3], [(0, 3), (18000, 3)])
 
+    def test_a_single_block_step_ends_its_cycles_phases(self):
+        # I4: LinuxCNC's step through the G33.1 line stands done back at the start (the task took
+        # up the next line): the reference's block is over there (phase idle with SPL), while
+        # LinuxCNC's next line starts only after the cycle start
+        rows = self.rows()
+        for k in range(4):
+            rows.append(row(128 + k, z=2.3 + 0.05 * k, rpm=-30 + 20 * k, revs=1.1, cmd=500, on=1, fwd=1, line=3))
+        rows += [row(132 + k, z=2.5, rpm=30, revs=1.2, cmd=500, on=1, fwd=1, line=3) for k in range(10)]
+        agent = {"c_run": 105, "given": [], "messages": [],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 135, "interp": 4, "paused": True, "task": 4, "step": True}],
+                 "end": {"reason": "stopped", "cycle": 141}}
+        ev = lcnc_trace.Trace(self.PROGRAM, rows, agent, self.CFG, 1000).build()
+        phases = [(e["t_us"], e["name"]) for e in ev if e["kind"] == "phase"]
+        spl = [e["t_us"] for e in ev if e["kind"] == "signal" and e["name"] == "SPL" and e["value"] == 1]
+        self.assertEqual(spl, [25000])
+        self.assertEqual(phases[-1], (25000, "idle"))
+        # a feed hold's standstill (no step) leaves the phase as it was
+        agent["states"][1].pop("step")
+        ev = lcnc_trace.Trace(self.PROGRAM, rows, agent, self.CFG, 1000).build()
+        self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"][-1], "retract")
+
     def test_a_pause_is_reported_where_the_axes_stand_still(self):
         # the task reports paused at cycle 114 while the rapid still moves until 116
         rows = [row(c) for c in range(100, 110)]
@@ -242,6 +265,23 @@ class Recording(unittest.TestCase):
         spl = [e["t_us"] for e in ev if e["kind"] == "signal" and e["name"] == "SPL" and e["value"] == 1]
         # not at the paused report (cycle 114, 4 ms) but at cycle 117, the first without motion
         self.assertEqual(spl, [7000])
+
+    def test_a_hold_is_reported_when_motion_went_on_before_the_cycle_start_was_stamped(self):
+        # cycles/g81_feed_hold (adapter17-6): Z stood from cycle 11733 to the cycle start, and
+        # moved again in the very cycle the agent stamped the cycle start taken: still a hold
+        rows = [row(c, z=2.0) for c in range(100, 110)]
+        for k, z in enumerate([1.99, 1.98, 1.975, 1.972, 1.971] + [1.97] * 10 + [1.969, 1.968]):
+            rows.append(row(110 + k, z=z, rpm=30, cmd=500, on=1, fwd=1, line=2, mtype=2))
+        agent = {"c_run": 105, "messages": [],
+                 "given": [{"cycle": 112, "sent": 111, "due": 112, "input": {"name": "feed_hold"}},
+                           {"cycle": 125, "sent": 121, "due": 122, "input": {"name": "cycle_start"}}],
+                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                            {"cycle": 112, "interp": 3, "paused": True, "task": 4},
+                            {"cycle": 125, "interp": 2, "paused": False, "task": 4}],
+                 "end": {"reason": "time_limit", "cycle": 126, "settled": 126}}
+        ev = lcnc_trace.Trace("G21 M3 S500\nG1 Z-5 F60\nM2\n", rows, agent, self.CFG, 1000).build()
+        spl = [(e["t_us"], e["value"]) for e in ev if e["kind"] == "signal" and e["name"] == "SPL"]
+        self.assertEqual(spl, [(6000, 1), (15000, 0)])
 
     def test_a_pause_in_a_synchronised_move_is_reported_where_motion_holds(self):
         # I1: feed hold during a G33.1 at cycle 117: LinuxCNC runs the tap to its end (tp.c pauses
@@ -518,6 +558,71 @@ class Conditions(unittest.TestCase):
         self.assertEqual(lcnc_adapter.Tracker({"block": 4}).see({"t_us": 5, "kind": "block", "line": 4, "text": ""}), 5)
         f = {"t_us": 9, "kind": "function", "letter": "M", "code": 3}
         self.assertEqual(lcnc_adapter.Tracker({"function": "M3"}).see(f), 9)
+
+
+class SingleBlock(unittest.TestCase):
+    """When a LinuxCNC step stands done. Oracle: LinuxCNC 2.9's own status while stepping
+    g331/single_block's program with AUTO_STEP (interp, exec state, motion queue, in position,
+    the task's current line; a row per change, at its ms)."""
+
+    # the second step (line 1: M3 S500) given at 444 ms, at line 0; the third (line 2: G0 Z5) at
+    # 866 ms, at line 2; the fourth (G33.1, with its index wait and reversal) at 1470 ms, at line 3
+    STEPS = [
+        (444, 0, [(445, 4, 5, 0, 1, 2)]),
+        (866, 2, [(867, 4, 7, 1, 0, 3), (1047, 4, 7, 0, 1, 3)]),
+        (1470, 3, [(1472, 4, 5, 1, 0, 4), (5443, 4, 5, 0, 1, 4)]),
+    ]
+
+    class St:
+        def __init__(self, interp, exec_state, queue, inpos, line):
+            self.interp_state, self.exec_state, self.queue, self.inpos, self.current_line = (
+                interp, exec_state, queue, inpos, line)
+
+    def held_from(self, stepper, rows, until):
+        """The first ms the stepper reports the step done, polling every ms through the rows."""
+        k, cur = 0, None
+        for ms in range(rows[0][0], until):
+            while k < len(rows) and rows[k][0] <= ms:
+                cur = self.St(*rows[k][1:])
+                k += 1
+            if stepper.done(cur, ms):
+                return ms
+        return None
+
+    def test_a_step_is_done_when_its_line_is_and_the_task_took_up_the_next(self):
+        for given, line, rows in self.STEPS:
+            st = lcnc_step.Stepper()
+            st.step(line)
+            # before LinuxCNC took the step: the line it stood at, motion at rest: not done
+            self.assertFalse(st.done(self.St(4, 5, 0, 1, line), given))
+            at = self.held_from(st, rows, rows[-1][0] + 10)
+            self.assertEqual(at, rows[-1][0] + st.settle, (given, rows))
+            self.assertTrue(st.done(self.St(4, 5, 0, 1, line + 1), at + 100))  # stays held
+
+    def test_a_wait_inside_the_line_is_not_a_step_done(self):
+        st = lcnc_step.Stepper()
+        st.step(3)
+        # G84's spindle reversal waits for motion with its queue empty, on the step's own line
+        self.assertIsNone(self.held_from(st, [(0, 4, 7, 0, 1, 3)], 200))
+        # a dwell (G84 P) on the next line's cycle stands still with the queue empty
+        self.assertIsNone(self.held_from(st, [(0, 4, 8, 0, 1, 4)], 200))
+        # the empty queue seen for less than the settling time, then motion again
+        self.assertIsNone(self.held_from(st, [(0, 4, 7, 0, 1, 4), (2, 4, 7, 1, 0, 4)], 200))
+
+    def test_the_start_is_stepped_again_only_for_a_first_line_that_acts(self):
+        # the single-block start is stepped once more when line 1 should have changed an output
+        # and none changed (the scenarios' first lines: M3 S500, M3 S600 F600)
+        P = lcnc_trace.Program
+        self.assertTrue(P("G21 M3 S500\nG0 X0 Z5\nM2\n").first_line_acts())
+        self.assertTrue(P("(tap)\n\nG17 G21 G98 M3 S600 F600\nM2\n").first_line_acts())
+        self.assertTrue(P("G0 X10\nM2\n").first_line_acts())
+        self.assertFalse(P("G21 G90 S500\nM3\nM2\n").first_line_acts())
+        self.assertFalse(P("G18 G21 F100\nG0 X1\n").first_line_acts())
+
+    def test_the_program_end_is_a_step_done(self):
+        st = lcnc_step.Stepper()
+        st.step(4)
+        self.assertEqual(self.held_from(st, [(0, 4, 3, 0, 1, 4), (5, 1, 2, 0, 1, 4)], 50), 5 + st.settle)
 
 
 if __name__ == "__main__":
