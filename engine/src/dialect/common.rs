@@ -43,6 +43,7 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         coordinated_rapid: false,
         feed_waits_at_speed: false,
         spindle_override_at_once: false,
+        step_stops_before_motion: false,
         index_latency_periods: 0,
         plc: PlcConfig {
             fin_us: ms("plc.fin_ms"),

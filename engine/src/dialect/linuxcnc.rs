@@ -78,6 +78,9 @@ impl Dialect for Linuxcnc {
         c.coordinated_rapid = true;
         c.feed_waits_at_speed = true;
         c.spindle_override_at_once = true;
+        // LinuxCNC's single block is its step: it stops where the task takes up a command of
+        // another line, and only the commands of moves carry a line (LCNC-INP-01, L-121).
+        c.step_stops_before_motion = true;
         c.index_latency_periods = 1;
         c
     }

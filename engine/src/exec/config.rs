@@ -78,6 +78,11 @@ pub struct PlantConfig {
     /// scales the commanded speed in every servo period). False: it acts from the next speed
     /// command (COM-MOT-06).
     pub spindle_override_at_once: bool,
+    /// Single block stops before a block that moves the axes, not after every block (LinuxCNC
+    /// 2.9's step, L-121): the blocks after a step's last move that move nothing (M2, `G80 M4`,
+    /// a dwell) run in that step; the program's first block is a step of its own. False: a stop
+    /// after every block (COM-INP-03).
+    pub step_stops_before_motion: bool,
     /// Servo periods between the spindle's index pulse and the first period of a move started
     /// on it, after the one the pulse falls in: 0, the next period (the reference's own); 1
     /// (LinuxCNC: the encoder clears `spindle.N.index-enable` after motion has run, and motion

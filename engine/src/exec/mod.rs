@@ -114,6 +114,12 @@ pub(crate) struct Exec<'a> {
     finished: Option<EndReason>,
     /// A block has been read and its steps not yet all taken (single block stops after it).
     in_block: bool,
+    /// `PlantConfig::step_stops_before_motion`: a block has ended in this step, so single block
+    /// stops before the next block that moves.
+    step_done: bool,
+    /// The block read at a stop before it (`step_stops_before_motion`): its line and text, shown
+    /// when the cycle start runs it.
+    held_block: Option<(u32, String)>,
     /// Inputs waiting for their condition.
     pending: Vec<triggers::Pending>,
     /// The dialect (to re-derive the plant when a parameter changes).
@@ -209,6 +215,8 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         blocks: 0,
         finished: None,
         in_block: false,
+        step_done: false,
+        held_block: None,
         cur_line: None,
         stall_angle: None,
         pending: opts

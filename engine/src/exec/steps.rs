@@ -17,8 +17,15 @@ impl Exec<'_> {
             self.hold_force();
             return;
         }
+        if let Some((line, text)) = self.held_block.take() {
+            // The block single block stopped before (`step_stops_before_motion`) runs now.
+            self.emit(Event::Block { line, text });
+        }
         let Some(step) = self.steps.pop_front() else {
-            if self.in_block && self.single_block && !self.hold_suppressed {
+            if self.in_block && self.cfg.step_stops_before_motion {
+                // LinuxCNC: the step goes on into the blocks that move nothing (L-121).
+                self.step_done = true;
+            } else if self.in_block && self.single_block && !self.hold_suppressed {
                 self.in_block = false;
                 self.hold_force();
                 return;
@@ -48,8 +55,9 @@ impl Exec<'_> {
             Some(i) if matches!(self.steps[i], Step::SingleBlockStop) => {
                 self.steps.remove(i);
             }
-            None => self.in_block = false,
-            Some(_) => {}
+            // LinuxCNC's step stops before the next block that moves, not here (L-121).
+            None if !self.cfg.step_stops_before_motion => self.in_block = false,
+            _ => {}
         }
     }
 
@@ -62,12 +70,46 @@ impl Exec<'_> {
         self.blocks += 1;
         self.in_block = true;
         self.cur_line = Some(block.line);
-        self.emit(Event::Block { line: block.line, text: block.text.clone() });
+        let (line, text) = (block.line, block.text.clone());
         let mut out = Vec::new();
-        match self.interp.block(block, &mut out) {
+        let read = self.interp.block(block, &mut out);
+        if read.is_ok() && self.stops_before(&out) {
+            self.step_done = false;
+            self.held_block = Some((line, text));
+            self.steps.extend(out);
+            self.hold_force();
+            return;
+        }
+        self.emit(Event::Block { line, text });
+        match read {
             Ok(()) => self.steps.extend(out),
             Err(a) => self.raise(a),
         }
+    }
+
+    /// LinuxCNC's step (`PlantConfig::step_stops_before_motion`, LCNC-INP-01, L-121): under single
+    /// block, once a block has ended in the present step, the step ends before the next block
+    /// that moves the axes. The task stops a step when it takes up a command of another line
+    /// (emctaskmain.cc `STEPPING_CHECK`), and only the moves carry their line to it (emccanon.cc:
+    /// `STRAIGHT_TRAVERSE`, `STRAIGHT_FEED`, `ARC_FEED`, `RIGID_TAP`, `STRAIGHT_PROBE` set the
+    /// line number; spindle, coolant, `DWELL` and the program end take the line before).
+    fn stops_before(&self, out: &[Step]) -> bool {
+        self.cfg.step_stops_before_motion
+            && self.step_done
+            && self.single_block
+            && !self.hold_suppressed
+            && out.iter().any(|s| {
+                matches!(
+                    s,
+                    Step::Rapid { .. }
+                        | Step::Feed { .. }
+                        | Step::Arc { .. }
+                        | Step::Tap(_)
+                        | Step::Thread(_)
+                        | Step::Follow(_)
+                        | Step::More(_)
+                )
+            })
     }
 
     fn start_step(&mut self, step: Step) {
