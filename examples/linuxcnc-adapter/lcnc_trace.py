@@ -523,6 +523,14 @@ class Trace:
                 if self.g331_dir and sr == self.g331_dir:
                     self.function(t, "M", 3 if sr > 0 else 4)
                     self.g331_dir = None
+            elif kind and kind.startswith("cycle") and sp != 0 and sr != 0:
+                # a direct reversal: a cycle's own reversals stop the spindle first (canon's
+                # STOP_SPINDLE_TURNING, then START_SPINDLE_*: a servo period at rest between), so
+                # this is the next line's M3/M4 (`G80 M4` after a G84), run before that line moves
+                target = self.line_with_m((3 if sr > 0 else 4,))
+                if target is not None:
+                    self.block(t, target)
+                self.function(t, "M", 3 if sr > 0 else 4)
             elif kind and kind.startswith("cycle") and self.cur_is_running(r):
                 if sp != 0 and sr == 0 and self.program_end_stop():
                     self.pending_stop = t  # the cycle's own stop, or the program end's (below)

@@ -438,6 +438,24 @@ class Recording(unittest.TestCase):
         self.assertEqual(zsp(0.0), [(0, 1)])
         self.assertEqual(zsp(6.0), [(0, 1), (5000, 0)])
 
+    def test_a_direct_reversal_after_a_cycle_is_the_next_lines_m4(self):
+        # g84/single_block: `G80 M4` after the G84 line turns the spindle from forward to reverse
+        # in one servo period (canon START_SPINDLE_COUNTERCLOCKWISE alone), while motion still
+        # names the G84 line: the M4 of line 4, not the cycle's M5 + M4 (its reversals pass
+        # through a period at rest)
+        prog = "G17 G21 G98 M3 S600 F600\nG0 X0 Y0 Z10\nG84 X20 Z-10 R2 P0.2\nG80 M4\nG0 Z20\nM2\n"
+        rows = [row(c) for c in range(100, 110)]
+        rows += [row(110 + k, z=10 - 0.1 * k, rpm=600, cmd=600, on=1, fwd=1, line=3, mtype=2) for k in range(5)]
+        rows += [row(115 + k, z=9.6, rpm=600 - 50 * k, cmd=-600, on=1, rev=1, line=3) for k in range(3)]
+        rows += [row(118 + k, z=9.6 + 0.1 * (k + 1), rpm=-500, cmd=-600, on=1, rev=1, line=5, mtype=1)
+                 for k in range(5)]
+        agent = {"c_run": 105, "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4}],
+                 "given": [], "messages": [], "end": {"reason": "time_limit", "cycle": 122, "settled": 122}}
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        m = [(e["t_us"], e["code"]) for e in ev if e["kind"] == "function" and e["letter"] == "M"]
+        self.assertEqual([x for x in m if x[0] > 0], [(5000, 4)])
+        self.assertIn({"t_us": 5000, "kind": "block", "line": 4, "text": "G80 M4"}, ev)
+
     def test_motion_stopping_after_a_reset_is_the_abort(self):
         # I2 / I1 (cycles/g81_reset, g331/feed_hold_then_reset_mid_stroke): the reset is sent at
         # 118 (a feed hold was pending since 112), motion stops at 121, the spindle goes off at
