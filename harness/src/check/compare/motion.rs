@@ -4,7 +4,7 @@
 
 use nc_engine::trace::Sample;
 
-use super::super::tolerance::{attribute, mm_nm, Topic};
+use super::super::tolerance::{attribute, mm_nm, ms_us, Topic};
 use super::{Comparator, Divergence, Run};
 use crate::scenario::timeline::{fixed, ms};
 
@@ -25,6 +25,9 @@ impl Comparator<'_, '_> {
             self.close_sync();
             self.sync_win = Some((k, None));
             self.cur_sync = None;
+        }
+        if self.stopping_on_interruption(&w, t) {
+            return;
         }
         let slack = self.floor_us - 1;
         let still = (mm_nm(self.tol.sync_mm) / 2).max(2000);
@@ -62,6 +65,18 @@ impl Comparator<'_, '_> {
         } else {
             self.close_sync();
         }
+    }
+
+    /// Within `event_ms` before the reference's reset or emergency stop that ends its
+    /// synchronised move `w`: the recorded input is held to `event_ms` of the reference's, and a
+    /// control whose abort reaches motion earlier brakes the axis off the spindle there (LinuxCNC
+    /// 2.9 stamps the reset when its task reports it done, after the axis has stopped, 16 ms
+    /// after it began to brake). Both sides let go of the spindle on purpose: not judged.
+    fn stopping_on_interruption(&self, w: &super::super::sync::Window, t: i64) -> bool {
+        let ev = ms_us(self.tol.event_ms);
+        self.r.inputs.iter().any(|(ti, name, _)| {
+            matches!(name.as_str(), "reset" | "emergency_stop") && *ti >= w.t0 && *ti <= w.t1 && t >= ti - ev
+        })
     }
 
     pub(super) fn close_sync(&mut self) {
