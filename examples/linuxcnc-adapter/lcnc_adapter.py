@@ -55,6 +55,24 @@ def log(*a):
     print("lcnc-adapter:", *a, file=sys.stderr, flush=True)
 
 
+def measured_lead(g, period_us):
+    """The lead (µs) an input given as `g` (the agent's `given` record: sent, taken at `cycle`)
+    shows, to give the next one of its kind that much before its time; None when it shows none.
+    A reset's only where its effect was seen (the spindle stopping): its echo comes once the
+    abort is done, long after it acted. Never a cycle start's: LinuxCNC takes a resume or a step
+    only once held (a hold taking effect, a step standing done), so its time to be taken is the
+    wait for that, and a cycle start sent that much earlier comes before the hold and is lost
+    (cycles/g88, g331/single_block stopped for good in a full run with a 21 ms lead)."""
+    name = g["input"]["name"]
+    if name == "cycle_start":
+        return None
+    trusted = name not in ("reset", "emergency_stop") or g.get("acted") or (
+        name == "emergency_stop" and g["input"].get("on"))
+    if g["cycle"] > g["sent"] and not g.get("unacknowledged") and trusted:
+        return (g["cycle"] - g["sent"]) * period_us
+    return None
+
+
 class Scenario:
     """One loaded scenario: its job, the inputs scheduled so far, the latest run's events and
     how far the harness has read them."""
@@ -228,12 +246,9 @@ class Adapter:
                 late.append({"input": g["input"]["name"], "late_us": (g["cycle"] - g["due"]) * P,
                              "t_us": (g["cycle"] - tr.t0) * P, "taken_us": (g["cycle"] - g["sent"]) * P,
                              "due_t_us": (g["due"] - tr.t0) * P})
-                # a reset's lead only where its effect was seen (the spindle stopping): its echo
-                # comes once the abort is done, long after it acted
-                trusted = g["input"]["name"] not in ("reset", "emergency_stop") or g.get("acted") or (
-                    g["input"]["name"] == "emergency_stop" and g["input"].get("on"))
-                if g["cycle"] > g["sent"] and not g.get("unacknowledged") and trusted:
-                    self.leads[g["input"]["name"]] = (g["cycle"] - g["sent"]) * P
+                lead = measured_lead(g, P)
+                if lead is not None:
+                    self.leads[g["input"]["name"]] = lead
         info = {"event": "run", "run": sc.runs, "seconds": round(time.monotonic() - t, 2),
                 "end": res["end"]["reason"], "events": len(events), "inputs": late}
         if res.get("t0") is not None:

@@ -525,6 +525,18 @@ class Leads(unittest.TestCase):
         self.assertEqual(len(runs), 1)
 
 
+    def test_a_cycle_start_teaches_no_lead(self):
+        # a resume is taken only once held: a cycle start taken 21 ms after it was sent waited
+        # for the hold; given 21 ms early the next time it would come before the hold, lost
+        def given(name, sent, cycle, **kw):
+            return dict({"input": {"name": name}, "sent": sent, "cycle": cycle}, **kw)
+
+        self.assertIsNone(lcnc_adapter.measured_lead(given("cycle_start", 100, 121), 1000))
+        self.assertEqual(lcnc_adapter.measured_lead(given("feed_override", 100, 120), 1000), 20000)
+        self.assertIsNone(lcnc_adapter.measured_lead(given("reset", 100, 135), 1000))
+        self.assertEqual(lcnc_adapter.measured_lead(given("reset", 100, 135, acted=True), 1000), 35000)
+
+
 class Delivery(unittest.TestCase):
     def test_the_trace_is_the_last_run_whole(self):
         # I1 (cycles/g81_feed_hold): the first run with the feed hold held at Z -3.085, the run
