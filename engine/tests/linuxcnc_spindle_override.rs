@@ -47,8 +47,8 @@ fn synchronised(t: &Trace, k: usize) -> Vec<(u64, f64, f64, f64)> {
     out
 }
 
-#[test]
-fn g33_1_follows_a_spindle_override_at_once_in_its_groove() {
+/// LinuxCNC's `G33.1 Z-10 K1` at S500, the spindle override set to 50 % 500 ms into the tap.
+fn g33_1_at_half_spindle_override() -> Trace {
     let inputs = InputSchedule::default().when(
         Condition::Phase(Phase::Cutting),
         1,
@@ -56,7 +56,12 @@ fn g33_1_follows_a_spindle_override_at_once_in_its_groove() {
         Input::SpindleOverride(50),
     );
     let opts = RunOptions { inputs, sample_us: 1000, ..RunOptions::default() };
-    let t = run("linuxcnc", &[], "G21 M3 S500\nG0 X0 Z5\nG33.1 Z-10 K1\nG0 Z20\nM2\n", &opts);
+    run("linuxcnc", &[], "G21 M3 S500\nG0 X0 Z5\nG33.1 Z-10 K1\nG0 Z20\nM2\n", &opts)
+}
+
+#[test]
+fn g33_1_follows_a_spindle_override_at_once_in_its_groove() {
+    let t = g33_1_at_half_spindle_override();
     assert_eq!(t.alarms().count(), 0);
     let s = synchronised(&t, 1);
     // K = 1 mm per revolution: Z + 1 mm × revolutions is constant once the tap has caught up
@@ -78,14 +83,7 @@ fn g33_1_follows_a_spindle_override_at_once_in_its_groove() {
 /// bottomed at Z-10.174, 60 ms behind for the rest of the tap (DEC-149).
 #[test]
 fn g33_1_reverses_an_overridden_spindle_at_its_ramp() {
-    let inputs = InputSchedule::default().when(
-        Condition::Phase(Phase::Cutting),
-        1,
-        500_000,
-        Input::SpindleOverride(50),
-    );
-    let opts = RunOptions { inputs, sample_us: 1000, ..RunOptions::default() };
-    let t = run("linuxcnc", &[], "G21 M3 S500\nG0 X0 Z5\nG33.1 Z-10 K1\nG0 Z20\nM2\n", &opts);
+    let t = g33_1_at_half_spindle_override();
     let bottom = t.samples().map(|(_, s)| s.axes[2]).min().unwrap() as f64 / 1e6;
     assert!((bottom + 10.086).abs() < 0.01, "bottom Z{bottom}, LinuxCNC Z-10.086");
 }

@@ -52,6 +52,24 @@ def from_ini(ini_text):
     return params
 
 
+def held(hold, then, then_at, end, end_reason="time_limit"):
+    """The agent's record of a run held at cycle `hold` (feed hold given and taken there, the task
+    paused) and then given `then` (an input, taken at `then_at`: (cycle, sent, due)), the task's
+    next state at `then_at[0] + 1` (a reset: idle at its cycle - 1), ended at `end`."""
+    c, sent, due = then_at
+    after = {"cycle": c - 1, "interp": 1, "paused": False, "task": 4} if then == "reset" else \
+        {"cycle": c + 1, "interp": 2, "paused": False, "task": 4}
+    record = {"c_run": 105, "messages": [],
+              "given": [{"cycle": hold, "sent": hold - 1, "due": hold, "input": {"name": "feed_hold"}},
+                        {"cycle": c, "sent": sent, "due": due, "input": {"name": then}}],
+              "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
+                         {"cycle": hold, "interp": 3, "paused": True, "task": 4}, after],
+              "end": {"reason": end_reason, "cycle": end}}
+    if end_reason == "time_limit":
+        record["end"]["settled"] = end
+    return record
+
+
 class MachineConfig(unittest.TestCase):
     CASES = [
         [],
@@ -272,13 +290,8 @@ class Recording(unittest.TestCase):
         rows = [row(c, z=2.0) for c in range(100, 110)]
         for k, z in enumerate([1.99, 1.98, 1.975, 1.972, 1.971] + [1.97] * 10 + [1.969, 1.968]):
             rows.append(row(110 + k, z=z, rpm=30, cmd=500, on=1, fwd=1, line=2, mtype=2))
-        agent = {"c_run": 105, "messages": [],
-                 "given": [{"cycle": 112, "sent": 111, "due": 112, "input": {"name": "feed_hold"}},
-                           {"cycle": 125, "sent": 121, "due": 122, "input": {"name": "cycle_start"}}],
-                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
-                            {"cycle": 112, "interp": 3, "paused": True, "task": 4},
-                            {"cycle": 125, "interp": 2, "paused": False, "task": 4}],
-                 "end": {"reason": "time_limit", "cycle": 126, "settled": 126}}
+        agent = held(112, "cycle_start", (125, 121, 122), 126)
+        agent["states"][-1]["cycle"] = 125  # the task resumed in the cycle it took the start
         ev = lcnc_trace.Trace("G21 M3 S500\nG1 Z-5 F60\nM2\n", rows, agent, self.CFG, 1000).build()
         spl = [(e["t_us"], e["value"]) for e in ev if e["kind"] == "signal" and e["name"] == "SPL"]
         self.assertEqual(spl, [(6000, 1), (15000, 0)])
@@ -291,13 +304,7 @@ class Recording(unittest.TestCase):
         rows += [row(c, rpm=30, cmd=500, on=1, fwd=1) for c in range(110, 115)]
         z = [5 - 0.1 * k for k in range(6)] + [4.5] * 3 + [4.5 + 0.1 * k for k in range(1, 6)] + [5.0] * 16
         rows += [row(115 + k, z=v, rpm=30, cmd=500, on=1, fwd=1, line=3) for k, v in enumerate(z)]
-        agent = {"c_run": 105, "messages": [],
-                 "given": [{"cycle": 117, "sent": 116, "due": 117, "input": {"name": "feed_hold"}},
-                           {"cycle": 140, "sent": 139, "due": 140, "input": {"name": "cycle_start"}}],
-                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
-                            {"cycle": 117, "interp": 3, "paused": True, "task": 4},
-                            {"cycle": 141, "interp": 2, "paused": False, "task": 4}],
-                 "end": {"reason": "time_limit", "cycle": 144, "settled": 144}}
+        agent = held(117, "cycle_start", (140, 139, 140), 144)
         ev = lcnc_trace.Trace("G21 M3 S500\nG0 X0 Z5\nG33.1 Z-1 K1\nG0 Z20\nM2\n", rows, agent, self.CFG,
                               1000).build()
         spl = [(e["t_us"], e["value"]) for e in ev if e["kind"] == "signal" and e["name"] == "SPL"]
@@ -465,13 +472,7 @@ class Recording(unittest.TestCase):
         z = [2 - 0.005 * k for k in range(11)] + [1.95 - 0.002, 1.95 - 0.003] + [1.947] * 17
         rows += [row(110 + k, z=v, rpm=800, cmd=800, on=1 if 110 + k < 125 else 0, fwd=1, line=3, mtype=2)
                  for k, v in enumerate(z)]
-        agent = {"c_run": 105, "messages": [],
-                 "given": [{"cycle": 112, "sent": 111, "due": 112, "input": {"name": "feed_hold"}},
-                           {"cycle": 140, "sent": 118, "due": 119, "input": {"name": "reset"}}],
-                 "states": [{"cycle": 109, "interp": 2, "paused": False, "task": 4},
-                            {"cycle": 112, "interp": 3, "paused": True, "task": 4},
-                            {"cycle": 139, "interp": 1, "paused": False, "task": 4}],
-                 "end": {"reason": "reset", "cycle": 140}}
+        agent = held(112, "reset", (140, 118, 119), 140, end_reason="reset")
         ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
         self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"][-1], "cutting")
         self.assertFalse([e for e in ev if e["kind"] == "signal" and e["name"] == "SPL" and e["value"]])

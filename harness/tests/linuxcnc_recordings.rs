@@ -157,14 +157,7 @@ fn a_g76_taper_starts_from_rest_and_catches_the_spindle_up_as_linuxcnc_does() {
         ])
         .output()
         .expect("nc-conform runs");
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(0), "{text}");
-    let max: f64 = text
-        .split("max sync error ")
-        .nth(1)
-        .and_then(|s| s.split(' ').next())
-        .and_then(|s| s.parse().ok())
-        .expect("a sync error figure");
+    let (max, text) = conformant_max_sync_mm(&out);
     assert!(max < 0.07, "max sync error {max} mm\n{text}");
 }
 
@@ -186,14 +179,20 @@ fn a_thread_pass_braking_on_a_reset_given_within_event_ms_is_not_a_sync_error() 
         .arg(root.join("examples/linuxcnc-adapter/tolerances.yaml"))
         .output()
         .expect("nc-conform runs");
-    let text = String::from_utf8_lossy(&out.stdout);
+    let (max, text) = conformant_max_sync_mm(&out);
+    // The pass itself, up to the braking, still follows the spindle within LinuxCNC's jitter.
+    assert!(max < 0.02, "max sync error {max} mm\n{text}");
+}
+
+/// The maximum synchronisation error (mm) of a check that must be conformant, with its output.
+fn conformant_max_sync_mm(out: &std::process::Output) -> (f64, String) {
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
     assert_eq!(out.status.code(), Some(0), "{text}");
-    let max: f64 = text
+    let max = text
         .split("max sync error ")
         .nth(1)
         .and_then(|s| s.split(' ').next())
         .and_then(|s| s.parse().ok())
         .expect("a sync error figure");
-    // The pass itself, up to the braking, still follows the spindle within LinuxCNC's jitter.
-    assert!(max < 0.02, "max sync error {max} mm\n{text}");
+    (max, text)
 }
