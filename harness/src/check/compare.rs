@@ -72,6 +72,9 @@ pub struct Comparator<'r, 'a> {
     /// The synchronised move of the reference being compared (index) and the error at its
     /// first compared sample.
     sync_win: Option<(usize, Option<f64>)>,
+    /// From when the synchronised move in `sync_win` is not judged: `event_ms` before the reset
+    /// or emergency stop that ends it (`i64::MAX` when none does), found once per move.
+    sync_cut_us: i64,
     cur_sync: Option<f64>,
     /// Recorded samples at which the synchronisation was compared.
     pub sync_samples: u64,
@@ -192,6 +195,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             findings: Vec::new(),
             sig: Signals::default(),
             sync_win: None,
+            sync_cut_us: i64::MAX,
             cur_sync: None,
             sync_samples: 0,
             fit: (0.0, 0),

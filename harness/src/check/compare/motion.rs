@@ -24,9 +24,10 @@ impl Comparator<'_, '_> {
         if self.sync_win.map(|x| x.0) != Some(k) {
             self.close_sync();
             self.sync_win = Some((k, None));
+            self.sync_cut_us = self.interruption_cut(&w);
             self.cur_sync = None;
         }
-        if self.stopping_on_interruption(&w, t) {
+        if t >= self.sync_cut_us {
             return;
         }
         let slack = self.floor_us - 1;
@@ -67,16 +68,23 @@ impl Comparator<'_, '_> {
         }
     }
 
-    /// Within `event_ms` before the reference's reset or emergency stop that ends its
-    /// synchronised move `w`: the recorded input is held to `event_ms` of the reference's, and a
-    /// control whose abort reaches motion earlier brakes the axis off the spindle there (LinuxCNC
-    /// 2.9 stamps the reset when its task reports it done, after the axis has stopped, 16 ms
-    /// after it began to brake). Both sides let go of the spindle on purpose: not judged.
-    fn stopping_on_interruption(&self, w: &super::super::sync::Window, t: i64) -> bool {
+    /// `event_ms` before the reference's reset or emergency stop that ends its synchronised move
+    /// `w` (`i64::MAX` when none does): the recorded input is held to `event_ms` of the
+    /// reference's, and a control whose abort reaches motion earlier brakes the axis off the
+    /// spindle there (LinuxCNC 2.9 stamps the reset when its task reports it done, after the axis
+    /// has stopped, 16 ms after it began to brake). Both sides let go of the spindle on purpose:
+    /// the samples from there are not judged.
+    fn interruption_cut(&self, w: &super::super::sync::Window) -> i64 {
         let ev = ms_us(self.tol.event_ms);
-        self.r.inputs.iter().any(|(ti, name, _)| {
-            matches!(name.as_str(), "reset" | "emergency_stop") && *ti >= w.t0 && *ti <= w.t1 && t >= ti - ev
-        })
+        self.r
+            .inputs
+            .iter()
+            .filter(|(ti, name, _)| {
+                matches!(name.as_str(), "reset" | "emergency_stop") && *ti >= w.t0 && *ti <= w.t1
+            })
+            .map(|(ti, _, _)| ti - ev)
+            .min()
+            .unwrap_or(i64::MAX)
     }
 
     pub(super) fn close_sync(&mut self) {
