@@ -136,7 +136,10 @@ class Adapter:
     def hello(self, req):
         if req.get("protocol") != PROTOCOL:
             return {"ok": False, "protocol": PROTOCOL, "error": "unsupported protocol"}
-        return {"ok": True, "protocol": PROTOCOL, "name": "linuxcnc", "version": linuxcnc_version(),
+        version = linuxcnc_version()
+        if self.args.machine:
+            version += f" (machine {self.args.machine}, {self.args.path_mode})"
+        return {"ok": True, "protocol": PROTOCOL, "name": "linuxcnc", "version": version,
                 "dialects": ["linuxcnc"]}
 
     def load(self, req):
@@ -470,9 +473,12 @@ def main():
     ap.add_argument("--max-run-s", type=float, default=float(os.environ.get("LCNC_MAX_RUN_S", 120)),
                     help="stop a LinuxCNC run after this much machine time (default 120 s); a scenario "
                          "that needs longer is not applicable")
-    ap.add_argument("--path-mode", choices=["G64", "G61", "G61.1"], default="G64",
-                    help="power-on path mode: LinuxCNC's default G64 (blending), G61 (exact path) or "
-                         "G61.1 (exact stop)")
+    ap.add_argument("--path-mode", type=lcnc_machine.path_mode, default="G64",
+                    help="power-on path mode: LinuxCNC's default G64 (blending, with its P and Q "
+                         "tolerances if given: `G64 P0.005`), G61 (exact path) or G61.1 (exact stop)")
+    ap.add_argument("--machine", default=None,
+                    help="the user's machine these parameters came from (its INI file's name): "
+                         "named in the identity the adapter gives (`hello`), so in every report")
     ap.add_argument("--planner", choices=["default", "exact"], default="default",
                     help="LinuxCNC's planner look-ahead: its default, or `exact` "
                          "([TRAJ] ARC_BLEND_OPTIMIZATION_DEPTH = 1: no tangent joins of colinear "

@@ -17,6 +17,7 @@ import json
 import math
 import os
 import pwd
+import re
 import shutil
 import socket
 import subprocess
@@ -89,6 +90,41 @@ def resolve(params):
     return v
 
 
+PATH_MODE = re.compile(r"^(G61\.1|G61|G64( ?P[0-9.]+)?( ?Q[0-9.]+)?)$")
+
+
+def path_mode(text):
+    """A power-on path mode as LinuxCNC's startup code writes it: `G61.1`, `G61`, `G64`,
+    `G64 P0.005`, `G64 P0.01 Q0.005` (letters upper case, one space before P and Q)."""
+    t = re.sub(r"\s+", "", text.upper())
+    t = re.sub(r"([PQ])", r" \1", t)
+    if not PATH_MODE.match(t):
+        raise ValueError(f"not a path mode: {text!r} (G61.1, G61, G64 or G64 P<tolerance> [Q<tolerance>])")
+    return t
+
+
+def startup_path_mode(ini_text):
+    """The path mode a machine's INI file powers on in: the last G61.1, G61 or G64 (with its P
+    and Q) of [RS274NGC] RS274NGC_STARTUP_CODE, or None when it names none (LinuxCNC's own
+    power-on mode is then G64, blending with no tolerance)."""
+    section, code = None, None
+    for raw in ini_text.splitlines():
+        line = raw.strip()
+        if line.startswith("[") and line.endswith("]"):
+            section = line[1:-1].strip()
+        elif section == "RS274NGC" and "=" in line and not line.startswith(("#", ";")):
+            key, value = line.split("=", 1)
+            if key.strip() == "RS274NGC_STARTUP_CODE" and code is None:
+                code = value
+    if code is None:
+        return None
+    code = re.sub(r"\([^)]*\)|;.*", " ", code.upper())
+    found = None
+    for m in re.finditer(r"G\s*(61\.1|61|64)(?![0-9.])((?:\s*[PQ]\s*[0-9.]+)*)", code):
+        found = path_mode("G" + m.group(1) + m.group(2))
+    return found
+
+
 def num(x):
     """A number as INI/HAL text (no exponent, no trailing zeros)."""
     s = f"{x:.9f}".rstrip("0").rstrip(".")
@@ -121,10 +157,12 @@ def machine_config(params, path_mode="G64", planner="default"):
     # cutting feed's limit as the smallest axis velocity and its time constant as that velocity
     # over the smallest acceleration: a scenario whose feed settings differ from what its axes
     # give cannot be set up on LinuxCNC.
+    # The cutting time constant is whole milliseconds (params --from-ini rounds it): the same
+    # within half a millisecond.
     v_min, a_min = min(vel.values()), min(acc.values())
     want = (round(v_min * 60, 6), round(v_min / a_min * 1000, 6))
     have = (round(feed_v * 60, 6), round(feed_v / feed_a * 1000, 6) if feed_ramp > 0 else 0.0)
-    if want != have:
+    if want[0] != have[0] or abs(want[1] - have[1]) > 0.5:
         raise NotApplicable(
             f"nc.feed_max_mm_min {have[0]:g} / nc.feed_ramp_ms {have[1]:g}: LinuxCNC's feeds share the "
             f"axes' limits (the slowest axis gives {want[0]:g} mm/min in {want[1]:g} ms)"

@@ -42,9 +42,10 @@ def main():
         fails = "".join(
             f"<li><b>{esc(f['rule'])}</b> [{esc(f['by'])}] {esc(f['text'])}</li>" for f in v["failures"]
         )
+        notes = "".join(f"<li class='note'>{esc(n)}</li>" for n in v.get("notes", []))
         rows.append(
             f"<tr class='{label.replace(' ', '-')}'><td>{esc(v['name'])}</td><td>{esc(label)}</td>"
-            f"<td>{v['seconds']:.1f}</td><td>{esc(v['title'])}<br><i>{esc(why)}</i><ul>{fails}</ul></td></tr>"
+            f"<td>{v['seconds']:.1f}</td><td>{esc(v['title'])}<br><i>{esc(why)}</i><ul>{fails}{notes}</ul></td></tr>"
         )
     rules = "".join(
         f"<tr><td>{esc(r)}</td><td>{len(s['passed'])}</td><td>{len(s['failed'])}</td>"
@@ -65,7 +66,7 @@ def main():
 <html><head><meta charset="utf-8"><title>LinuxCNC conformance: {esc(rep['controller'])}</title>
 <style>body{{font-family:sans-serif}} td{{vertical-align:top;border-bottom:1px solid #ccc;padding:2px 6px}}
 tr.passed td:nth-child(2){{color:green}} tr.failed td:nth-child(2){{color:#b00}}
-tr.not-applicable td:nth-child(2){{color:#888}} table{{border-collapse:collapse}}</style></head><body>
+tr.not-applicable td:nth-child(2){{color:#888}} li.note{{color:#666}} table{{border-collapse:collapse}}</style></head><body>
 <h1>LinuxCNC conformance</h1>
 <p>Controller: <b>{esc(rep['controller'])}</b> (Debian linuxcnc-uspace, simulator HAL, headless, through
 examples/linuxcnc-adapter). Scenarios: {rep['passed']} passed, {rep['failed']} failed,

@@ -39,7 +39,7 @@ def from_ini(ini_text):
     params, cur = {}, None
     for line in out.splitlines():
         code = line.split("#")[0].rstrip()
-        if not code.strip() or code.strip() == "params:":
+        if not code.strip() or code.strip() == "params:" or code.startswith("dialect:"):
             continue
         key, _, value = code.strip().partition(":")
         if line.startswith("    "):
@@ -126,6 +126,35 @@ class MachineConfig(unittest.TestCase):
             self.assertFalse(lcnc_machine.zombie(os.getpid()))
         finally:
             os.waitpid(pid, 0)
+
+    def test_a_users_machine_runs_as_its_ini_maps(self):
+        # `scripts/linuxcnc-conform --ini`: what params --from-ini writes of a machine is a machine
+        # the adapter can set up, also when its cutting time constant is not whole ms (166 mm/s
+        # over 1500 mm/s^2: 110.667 ms, written 111) and its [TRAJ] caps lie below the axes'.
+        axes = "".join(f"[AXIS_{a}]\nMAX_VELOCITY = 166\nMAX_ACCELERATION = 1500\n" for a in "XYZ")
+        for traj in ("", "MAX_LINEAR_VELOCITY = 100\nMAX_LINEAR_ACCELERATION = 1000\n"):
+            got = from_ini("[TRAJ]\nCOORDINATES = X Y Z\nLINEAR_UNITS = mm\n" + traj + axes)
+            params = [{"id": k, "axis": a, "value": x} for k, v in got.items()
+                      for a, x in (v.items() if isinstance(v, dict) else [(None, v)])]
+            with self.subTest(traj=traj):
+                ini, _, _ = lcnc_machine.machine_config(params)
+                if traj:
+                    self.assertIn("MAX_VELOCITY = 100\n", ini)
+
+    def test_the_startup_code_gives_the_power_on_path_mode(self):
+        def mode(code):
+            return lcnc_machine.startup_path_mode(f"[EMC]\nX = 1\n[RS274NGC]\nRS274NGC_STARTUP_CODE = {code}\n")
+
+        # LinuxCNC's sample configurations write these
+        self.assertEqual(mode("G17 G21 G40 G43H0 G54 G64P0.005 G80 G90 G94 G97 M5 M9"), "G64 P0.005")
+        self.assertEqual(mode("G18 G21 G40 G49 G54 G80 G90 G94 G8 M9 M5 G64 P0.005"), "G64 P0.005")
+        self.assertEqual(mode("G21 G61.1 (not G64 in a comment)"), "G61.1")
+        self.assertEqual(mode("G64 G61"), "G61")
+        self.assertIsNone(mode("M52 P1"))
+        self.assertIsNone(lcnc_machine.startup_path_mode("[RS274NGC]\nPARAMETER_FILE = x.var\n"))
+        self.assertEqual(lcnc_machine.path_mode("g64 p0.01 q0.005"), "G64 P0.01 Q0.005")
+        with self.assertRaises(ValueError):
+            lcnc_machine.path_mode("G1")
 
     def test_what_linuxcnc_cannot_have_is_not_applicable(self):
         for params, says in [

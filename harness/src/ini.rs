@@ -6,9 +6,11 @@
 //! - per axis of `[TRAJ] COORDINATES` (trivkins: joint *i* is the *i*-th letter): the smaller of
 //!   `[AXIS_L]` and `[JOINT_i]` `MAX_VELOCITY` (units/s) → `nc.rapid_mm_min`, and velocity over the
 //!   smaller `MAX_ACCELERATION` → `nc.rapid_ramp_ms`; `[JOINT_i] BACKLASH` → `nc.backlash_mm`;
+//! - `[TRAJ] MAX_LINEAR_VELOCITY` and `MAX_LINEAR_ACCELERATION` cap every move, a one-axis rapid
+//!   too: an axis faster than them is written at them;
 //! - the cutting feed: the smallest axis velocity, capped by `[TRAJ] MAX_LINEAR_VELOCITY`, →
 //!   `nc.feed_max_mm_min`, over the smallest acceleration (capped by `MAX_LINEAR_ACCELERATION`) →
-//!   `nc.feed_ramp_ms`;
+//!   `nc.feed_ramp_ms` (whole milliseconds, rounded);
 //! - `[SPINDLE_0] MAX_FORWARD_VELOCITY` (rpm) → `nc.spindle_max_rpm`;
 //! - `[DISPLAY] MAX_FEED_OVERRIDE`, `MIN_/MAX_SPINDLE_OVERRIDE` (factors) → the override
 //!   percentages (DEC-112).
@@ -161,6 +163,15 @@ pub fn map(ini: &Ini) -> Mapping {
         .map(|c| c.to_ascii_uppercase())
         .collect();
     let (mut feed_v, mut feed_a): (Sourced, Sourced) = (None, None);
+    // [TRAJ]'s limits cap every move's vector, a one-axis rapid too: an axis faster than them
+    // runs at them.
+    let traj = |key: &str, notes: &mut Vec<String>| -> Sourced {
+        ini.num("TRAJ", key, notes)
+            .filter(|(v, _)| *v > 0.0)
+            .map(|(v, l)| (v, format!("[TRAJ] {key} = {v} (line {l}), below the axis' own, caps it")))
+    };
+    let traj_v = traj("MAX_LINEAR_VELOCITY", notes);
+    let traj_a = traj("MAX_LINEAR_ACCELERATION", notes);
     for (j, &letter) in coords.iter().enumerate() {
         if !matches!(letter, 'X' | 'Y' | 'Z') {
             notes.push(format!("axis {letter} (joint {j}): the linuxcnc dialect models X, Y and Z only"));
@@ -180,8 +191,12 @@ pub fn map(ini: &Ini) -> Mapping {
                 (a, b) => a.or(b),
             }
         };
-        let v = smaller("MAX_VELOCITY", notes);
-        let a = smaller("MAX_ACCELERATION", notes);
+        let capped = |own: Sourced, cap: &Sourced| match (own, cap) {
+            (Some(o), Some(c)) if c.0 < o.0 => Some(c.clone()),
+            (o, _) => o,
+        };
+        let v = capped(smaller("MAX_VELOCITY", notes), &traj_v);
+        let a = capped(smaller("MAX_ACCELERATION", notes), &traj_a);
         match &v {
             Some((vel, src)) if *vel > 0.0 => {
                 out.push(Mapped {
@@ -242,11 +257,15 @@ pub fn map(ini: &Ini) -> Mapping {
             source: format!("the smallest of the axes' and [TRAJ]'s velocities: {fsrc} × 60"),
         });
         if let Some((fa, asrc)) = feed_a {
+            // The cutting time constant is whole milliseconds.
+            let ms = fv / fa * 1000.0;
+            let rounded =
+                if ms == ms.round() { String::new() } else { format!(" ({} ms rounded)", round(ms, 3)) };
             out.push(Mapped {
                 id: "nc.feed_ramp_ms",
                 axis: None,
-                value: round(fv / fa * 1000.0, 1),
-                source: format!("that velocity / the smallest acceleration, {asrc}"),
+                value: ms.round(),
+                source: format!("that velocity / the smallest acceleration, {asrc}{rounded}"),
             });
         }
     }
@@ -303,6 +322,7 @@ pub fn params_file(m: &Mapping, source: &str) -> String {
         s,
         "# nc-conform params --from-ini {source}: the linuxcnc dialect's parameters from the INI file."
     );
+    let _ = writeln!(s, "dialect: linuxcnc");
     let _ = writeln!(s, "params:");
     let mut done: Vec<&str> = Vec::new();
     for v in &m.values {

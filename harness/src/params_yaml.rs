@@ -9,9 +9,11 @@
 //!   34: {X: 0.01, Z: 0.005}   # one value per axis
 //! ```
 //!
-//! The top level is a mapping with one key, `params` (any other key is an error); `params` maps
-//! parameter ids to a number (`true`/`false` read as 1/0) or to a mapping of axis letter to
-//! number. Every error carries the line and column of the key or value at fault.
+//! The top level is a mapping with the key `params` and, optionally, `dialect` (the dialect whose
+//! parameters these are: a file written for one machine is refused on another's dialect; any
+//! other key is an error); `params` maps parameter ids to a number (`true`/`false` read as 1/0)
+//! or to a mapping of axis letter to number. Every error carries the line and column of the key
+//! or value at fault.
 
 use std::fmt;
 
@@ -71,13 +73,52 @@ impl std::error::Error for ParamsFileError {}
 /// YAML syntax errors, unknown top-level keys, ids or axes that are not strings or numbers, and
 /// values that are not numbers, with their location.
 pub fn parse(text: &str) -> Result<Vec<Setting>, ParamsFileError> {
+    parse_file(text).map(|f| f.settings)
+}
+
+/// A parameter file read whole: the dialect it names, if any, and its settings.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParamsFile {
+    /// `dialect:` as written, with where: the only dialect the file may be applied to.
+    pub dialect: Option<(String, Span)>,
+    /// The settings, in the order written.
+    pub settings: Vec<Setting>,
+}
+
+impl ParamsFile {
+    /// Whether the file may be applied to a machine of `dialect` (it names none, or that one).
+    pub fn fits(&self, dialect: &str) -> bool {
+        self.dialect.as_ref().is_none_or(|(d, _)| d == dialect)
+    }
+}
+
+/// [`parse`], with the `dialect:` the file names.
+///
+/// # Errors
+///
+/// As [`parse`]; also a `dialect` that is not one of the engine's.
+pub fn parse_file(text: &str) -> Result<ParamsFile, ParamsFileError> {
     if text.trim().is_empty() {
-        return Ok(Vec::new());
+        return Ok(ParamsFile::default());
     }
     // YAML 1.2 booleans only: `Y` and `N` are axis letters, not yes and no.
     let options = serde_saphyr::options! { strict_booleans: true, with_snippet: false };
     let file: File = serde_saphyr::from_str_with_options(text, options).map_err(|e| yaml_error(text, &e))?;
-    settings_from(text, file.params.unwrap_or_default())
+    let dialect = match file.dialect {
+        None => None,
+        Some(d) => {
+            let span = span_of(text, &d.referenced);
+            if !nc_engine::dialect_names().contains(&d.value.as_str()) {
+                return Err(ParamsFileError {
+                    span,
+                    message: format!("unknown dialect `{}`", d.value),
+                    expected: Some(format!("one of {}", nc_engine::dialect_names().join(", "))),
+                });
+            }
+            Some((d.value, span))
+        }
+    };
+    Ok(ParamsFile { dialect, settings: settings_from(text, file.params.unwrap_or_default())? })
 }
 
 /// The settings of a `params` mapping read as part of a larger YAML file (`text` is that file).
@@ -137,8 +178,20 @@ pub fn settings_from(text: &str, entries: ParamEntries) -> Result<Vec<Setting>, 
 /// id, out of range, per-axis mismatch, an axis the dialect does not have), located at the id
 /// for an unknown id, at the axis letter for a bad axis, else at the value.
 pub fn apply(text: &str, machine: &mut Machine) -> Result<usize, ParamsFileError> {
-    let settings = parse(text)?;
-    apply_settings(&settings, machine)
+    let file = parse_file(text)?;
+    if let Some((d, span)) = &file.dialect {
+        if !file.fits(machine.dialect.name()) {
+            return Err(ParamsFileError {
+                span: *span,
+                message: format!(
+                    "these are parameters of dialect {d}, not of dialect {}",
+                    machine.dialect.name()
+                ),
+                expected: Some(format!("`dialect: {}` or no `dialect` key", machine.dialect.name())),
+            });
+        }
+    }
+    apply_settings(&file.settings, machine)
 }
 
 /// Sets each value on `machine`, in order, with [`apply`]'s checks and error locations.
@@ -206,6 +259,8 @@ pub(crate) fn yaml_error(text: &str, e: &serde_saphyr::Error) -> ParamsFileError
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct File {
+    #[serde(default)]
+    dialect: Option<Spanned<String>>,
     #[serde(default)]
     params: Option<ParamEntries>,
 }

@@ -127,7 +127,22 @@ fn yaml_errors_are_located() {
 
 #[test]
 fn unknown_top_level_keys_are_named() {
-    let e = parse("params: {}\ndialect: gsk-lathe\n").unwrap_err();
+    let e = parse("params: {}\nmachine: gsk-lathe\n").unwrap_err();
     assert_eq!(e.span.line, 2, "{e}");
-    assert!(e.message.contains("dialect"), "{e}");
+    assert!(e.message.contains("machine"), "{e}");
+}
+
+#[test]
+fn a_file_may_name_its_dialect_and_is_refused_on_another() {
+    let f = parse_file("dialect: linuxcnc\nparams:\n  nc.feed_ramp_ms: 80\n").unwrap();
+    assert_eq!(f.dialect.as_ref().map(|(d, s)| (d.as_str(), s.line, s.col)), Some(("linuxcnc", 1, 10)));
+    assert!(f.fits("linuxcnc") && !f.fits("fanuc-mill"));
+    assert_eq!(f.settings.len(), 1);
+    assert!(ParamsFile::default().fits("gsk-lathe"), "no dialect named: any");
+    let mut m = nc_engine::Machine::new("fanuc-mill").unwrap();
+    let e = apply("dialect: linuxcnc\nparams:\n  nc.feed_ramp_ms: 80\n", &mut m).unwrap_err();
+    assert_eq!((e.span.line, e.span.col), (1, 10), "{e}");
+    assert!(e.message.contains("parameters of dialect linuxcnc, not of dialect fanuc-mill"), "{e}");
+    let e = parse_file("dialect: fanuc\n").unwrap_err();
+    assert!(e.message.contains("unknown dialect `fanuc`"), "{e}");
 }

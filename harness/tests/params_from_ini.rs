@@ -68,10 +68,17 @@ fn inch_machines_are_scaled_and_what_cannot_be_mapped_is_named() {
     let (code, yaml, err) = from_ini(&ini);
     assert_eq!(code, 0, "{err}");
     let m = machine_with(&yaml);
-    // X: the joint's 2 in/s is the smaller; 2 × 25.4 × 60 mm/min, ramp 2/100 s.
-    assert!((m.params.get_axis("nc.rapid_mm_min", Some('X')) - 3048.0).abs() < 1e-6, "{yaml}");
-    assert!((m.params.get_axis("nc.rapid_ramp_ms", Some('X')) - 20.0).abs() < 1e-6, "{yaml}");
-    assert!((m.params.get_axis("nc.rapid_ramp_ms", Some('Z')) - 80.0).abs() < 1e-6, "{yaml}");
+    // [TRAJ] MAX_LINEAR_VELOCITY (1 in/s) caps every move, one axis' rapid too (below the X
+    // joint's 2 in/s and Z's 4): 1 × 25.4 × 60 mm/min; ramps 1/100 s (X's joint) and 1/50 s (Z).
+    assert!((m.params.get_axis("nc.rapid_mm_min", Some('X')) - 1524.0).abs() < 1e-6, "{yaml}");
+    assert!((m.params.get_axis("nc.rapid_mm_min", Some('Z')) - 1524.0).abs() < 1e-6, "{yaml}");
+    assert!((m.params.get_axis("nc.rapid_ramp_ms", Some('X')) - 10.0).abs() < 1e-6, "{yaml}");
+    assert!((m.params.get_axis("nc.rapid_ramp_ms", Some('Z')) - 20.0).abs() < 1e-6, "{yaml}");
+    assert!(yaml.contains("[TRAJ] MAX_LINEAR_VELOCITY = 1 (line 6), below the axis' own, caps it"), "{yaml}");
+    // The cutting time constant is whole ms: 1 in/s over 50 in/s² = 20 ms exactly here, and a
+    // file for the linuxcnc dialect says so.
+    assert!((m.params.get("nc.feed_ramp_ms") - 20.0).abs() < 1e-6, "{yaml}");
+    assert!(yaml.contains("\ndialect: linuxcnc\n"), "{yaml}");
     // The feed is capped by [TRAJ] MAX_LINEAR_VELOCITY (1 in/s).
     assert!((m.params.get("nc.feed_max_mm_min") - 1524.0).abs() < 1e-6, "{yaml}");
     assert!(yaml.contains("SERVO_PERIOD = 1500000 ns") && yaml.contains("1, 2, 4 or 8 ms"), "{yaml}");
@@ -101,4 +108,25 @@ fn linuxcncs_sample_configurations_map() {
         let x = m.params.get_axis("nc.rapid_mm_min", Some('X'));
         assert!((x - x_mm_min).abs() < 1e-3, "{file}: X {x} mm/min\n{yaml}");
     }
+}
+
+/// A cutting time constant that is not whole milliseconds (gmoccapy's sample machine: 166 mm/s
+/// over 1500 mm/s²) is rounded, saying so, not left out (it was: the feed then kept the dialect's
+/// 100 ms, and the LinuxCNC adapter found every scenario's feed settings impossible).
+#[test]
+fn a_fractional_cutting_time_constant_is_rounded_not_dropped() {
+    let dir = std::env::temp_dir().join(format!("ncc-ini-frac-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let ini = dir.join("frac.ini");
+    let axes: String = ["X", "Y", "Z"]
+        .iter()
+        .map(|a| format!("[AXIS_{a}]\nMAX_VELOCITY = 166\nMAX_ACCELERATION = 1500\n"))
+        .collect();
+    std::fs::write(&ini, format!("[TRAJ]\nCOORDINATES = X Y Z\nLINEAR_UNITS = mm\n{axes}")).unwrap();
+    let (code, yaml, err) = from_ini(&ini);
+    assert_eq!(code, 0, "{err}");
+    let m = machine_with(&yaml);
+    assert!((m.params.get("nc.feed_ramp_ms") - 111.0).abs() < 1e-9, "{yaml}");
+    assert!(yaml.contains("(110.667 ms rounded)"), "{yaml}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,5 +1,5 @@
 //! `nc-conform conform --adapter "CMD ARGS" [--scenarios DIR] [--filter TEXT] [--junit FILE]
-//! [--report FILE.json] [--timeout-ms N]`: every scenario against a controller behind an adapter
+//! [--report FILE.json] [--timeout-ms N] [--tolerances FILE.yaml] [--params FILE.yaml]`: every scenario against a controller behind an adapter
 //! program (`docs/adapter-protocol.md`), a summary per rule id (passed, failed, which scenarios).
 //! `nc-conform serve` (hidden) is the reference engine behind the same protocol.
 //!
@@ -14,10 +14,11 @@ use clap::Args;
 
 use super::{display_name, EXIT_INPUT, EXIT_OK, EXIT_RUN_FAILED};
 use crate::conform::process::{split_command, ProcessController};
-use crate::conform::suite::{run_one_within, scenario_files, SuiteReport};
+use crate::conform::suite::{run_one_on, scenario_files, MachineSetup, SuiteReport};
 use crate::conform::verdict::Status;
 use crate::conform::Controller;
 use crate::diag::InputError;
+use crate::scenario::load::MachineParams;
 
 /// Arguments of `nc-conform conform`.
 #[derive(Debug, Args)]
@@ -48,6 +49,13 @@ pub struct ConformArgs {
     /// controller's task and PLC cycles are not the reference's.
     #[arg(long, value_name = "FILE.yaml")]
     pub tolerances: Option<PathBuf>,
+
+    /// The machine's parameters (a parameter file, docs/parameters-format.md; for LinuxCNC the
+    /// output of `nc-conform params --from-ini MACHINE.ini`) under every scenario's own: the
+    /// reference runs each scenario on them and the controller is sent them in `load`. A file
+    /// naming a `dialect:` applies to that dialect's scenarios only.
+    #[arg(long, value_name = "FILE.yaml")]
+    pub params: Option<PathBuf>,
 
     /// Write the verdicts as JUnit XML (one test case per scenario).
     #[arg(long, value_name = "FILE.xml")]
@@ -88,9 +96,12 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
         e.expected = Some(".yaml files under the directory (and a --filter that matches some)".into());
         return Err(e);
     }
-    let machine = match &args.tolerances {
-        Some(p) => crate::input::load_tolerances(p)?,
-        None => crate::check::Tolerances::default(),
+    let machine = MachineSetup {
+        tolerances: match &args.tolerances {
+            Some(p) => crate::input::load_tolerances(p)?,
+            None => crate::check::Tolerances::default(),
+        },
+        params: args.params.as_deref().map(MachineParams::read).transpose()?,
     };
     let mut ctl = ProcessController::new(argv, Duration::from_millis(args.timeout_ms.max(1)))
         .with_scenario_limit(Duration::from_millis(args.scenario_timeout_ms.max(1)));
@@ -98,9 +109,17 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
         .identity()
         .map_err(|e| InputError::new("--adapter", format!("the adapter cannot be greeted: {e}")))?;
     println!("{} {} (dialects: {})", id.name, id.version, id.dialects.join(", "));
+    if let Some(p) = &machine.params {
+        let of = p.file.dialect.as_ref().map_or("every dialect".to_string(), |(d, _)| format!("dialect {d}"));
+        println!(
+            "machine parameters: {} ({} values, for {of}), under each scenario's own",
+            p.name,
+            p.file.settings.len()
+        );
+    }
     let mut report = SuiteReport::new(&id);
     for (path, name) in &files {
-        let v = run_one_within(&mut ctl, &id.dialects, path, name, &machine)?;
+        let v = run_one_on(&mut ctl, &id.dialects, path, name, &machine)?;
         let tag = match v.status {
             Status::Passed => "ok  ",
             Status::Failed => "FAIL",

@@ -66,8 +66,37 @@ pub fn run_one_within(
     name: &str,
     machine: &Tolerances,
 ) -> Result<ScenarioVerdict, InputError> {
+    let setup = MachineSetup { tolerances: machine.clone(), params: None };
+    run_one_on(ctl, dialects, path, name, &setup)
+}
+
+/// What a user states of their machine for every scenario (`conform --tolerances`, `--params`).
+#[derive(Debug, Clone, Default)]
+pub struct MachineSetup {
+    /// The comparison's tolerances for a scenario without a `.check.yaml` of its own.
+    pub tolerances: Tolerances,
+    /// The machine's parameters, under each scenario's own: the reference runs on them and the
+    /// controller is sent them in `load`.
+    pub params: Option<load::MachineParams>,
+}
+
+/// [`run_one_within`] on the machine's own parameters too (`conform --params FILE`): the
+/// reference runs the scenario on them with the scenario's parameters on top, and the controller
+/// is sent the same values in `load`.
+///
+/// # Errors
+///
+/// As [`run_one`]; also a machine parameter the scenario's dialect refuses.
+pub fn run_one_on(
+    ctl: &mut dyn Controller,
+    dialects: &[String],
+    path: &Path,
+    name: &str,
+    setup: &MachineSetup,
+) -> Result<ScenarioVerdict, InputError> {
+    let machine = &setup.tolerances;
     let started = std::time::Instant::now();
-    let s = load::load(path, name)?;
+    let s = load::load_over(path, name, setup.params.as_ref())?;
     let dialect = s.machine.dialect.name();
     if !dialects.iter().any(|d| d == dialect) {
         let why = format!("the controller does not run dialect {dialect}");

@@ -40,6 +40,50 @@ pub struct Scenario {
     /// The parser's refusal, when the scenario expects one (`expect.refused`): the program is
     /// then empty and the verdict compares this error with the expectation.
     pub refusal: Option<(Option<nc_engine::ParseError>, ExpectRefused, String)>,
+    /// The scenario's own parameters that replace a machine's (loaded over [`MachineParams`]):
+    /// `nc.spindle_ramp_ms = 20000 (the machine's: 1000)`, one per value the scenario sets.
+    pub over_machine: Vec<String>,
+}
+
+/// A machine's own parameters (`conform --params FILE`), under every scenario's: the scenario's
+/// parameters are its conditions and set on top of them.
+#[derive(Debug, Clone)]
+pub struct MachineParams {
+    /// The file as named.
+    pub name: String,
+    /// Its text (for the location of an error).
+    pub text: String,
+    /// What it sets, and the dialect it names.
+    pub file: params_yaml::ParamsFile,
+}
+
+impl MachineParams {
+    /// Reads a parameter file.
+    ///
+    /// # Errors
+    ///
+    /// Unreadable, or not a parameter file (located).
+    pub fn read(path: &Path) -> Result<MachineParams, InputError> {
+        let name = crate::input::display_name(path);
+        let text = crate::input::read_utf8(path, crate::input::YAML)?;
+        let file = params_yaml::parse_file(&text).map_err(|e| at(&name, &text, e))?;
+        Ok(MachineParams { name, text, file })
+    }
+
+    /// Sets them on `machine` when they are of its dialect (a file naming another dialect leaves
+    /// it alone); returns whether it did.
+    ///
+    /// # Errors
+    ///
+    /// A value the dialect refuses, located in the parameter file.
+    pub fn apply(&self, machine: &mut Machine) -> Result<bool, InputError> {
+        if !self.file.fits(machine.dialect.name()) {
+            return Ok(false);
+        }
+        params_yaml::apply_settings(&self.file.settings, machine)
+            .map_err(|e| at(&self.name, &self.text, e))?;
+        Ok(true)
+    }
 }
 
 /// Reads and checks a scenario file. `name` is how errors and reports name it.
@@ -48,10 +92,20 @@ pub struct Scenario {
 ///
 /// Unreadable files, YAML errors, unknown keys, bad values, program syntax errors, each located.
 pub fn load(path: &Path, name: &str) -> Result<Scenario, InputError> {
+    load_over(path, name, None)
+}
+
+/// [`load`] on a machine's own parameters: `machine`'s values first (when of the scenario's
+/// dialect), the scenario's on top.
+///
+/// # Errors
+///
+/// As [`load`]; also a machine parameter the scenario's dialect refuses.
+pub fn load_over(path: &Path, name: &str, machine: Option<&MachineParams>) -> Result<Scenario, InputError> {
     let bytes = crate::input::read_capped(path, crate::input::YAML).map_err(|m| InputError::new(name, m))?;
     let text = String::from_utf8(bytes)
         .map_err(|_| InputError::new(name, "cannot read: stream did not contain valid UTF-8"))?;
-    load_text(&text, name, path.parent().unwrap_or(Path::new(".")))
+    load_text_over(&text, name, path.parent().unwrap_or(Path::new(".")), machine)
 }
 
 /// The most samples a scenario's run may write (`options.time_limit_ms` / `options.sample_us`):
@@ -64,6 +118,20 @@ pub const MAX_SAMPLES: u64 = 1_000_000;
 ///
 /// As [`load`].
 pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputError> {
+    load_text_over(text, name, dir, None)
+}
+
+/// [`load_text`] on a machine's own parameters, as [`load_over`].
+///
+/// # Errors
+///
+/// As [`load_over`].
+pub fn load_text_over(
+    text: &str,
+    name: &str,
+    dir: &Path,
+    base: Option<&MachineParams>,
+) -> Result<Scenario, InputError> {
     let options = serde_saphyr::options! { strict_booleans: true, with_snippet: false };
     let mut file: ScenarioFile = serde_saphyr::from_str_with_options(text, options).map_err(|e| {
         let pe = params_yaml::yaml_error(text, &e);
@@ -82,6 +150,18 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
     })?;
     let settings =
         params_yaml::settings_from(text, std::mem::take(&mut file.params)).map_err(|e| at(name, text, e))?;
+    let mut over_machine = Vec::new();
+    if let Some(base) = base {
+        if base.apply(&mut machine)? {
+            for st in &settings {
+                let was = machine.params.get_axis(&st.id, st.axis);
+                if machine.params.def(&st.id).is_some() && was != st.value {
+                    let axis = st.axis.map_or(String::new(), |a| format!(" {a}"));
+                    over_machine.push(format!("{}{axis} = {} (the machine's: {was})", st.id, st.value));
+                }
+            }
+        }
+    }
     params_yaml::apply_settings(&settings, &mut machine).map_err(|e| at(name, text, e))?;
     let ctx = Ctx { file: name, text, axes: machine.dialect.axes() };
 
@@ -150,6 +230,7 @@ pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputEr
         diagram,
         invariants,
         refusal,
+        over_machine,
     })
 }
 
