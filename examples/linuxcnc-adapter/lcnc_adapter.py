@@ -24,6 +24,7 @@ Standard library only; LinuxCNC (Debian's linuxcnc-uspace 2.9) must be installed
 """
 
 import argparse
+import bisect
 import json
 import math
 import os
@@ -93,7 +94,6 @@ class Scenario:
         self.interp_error = None
         self.ended = False
         self.leads = {}  # input name -> µs LinuxCNC's task took to take it in the last run
-        self.fired = set()  # (condition, t_us) already stopped on
         self.final = []  # the last run's events
         self.out = []  # what `read` answers next: the last run once the run has ended
 
@@ -293,6 +293,15 @@ class Adapter:
         trackers = [Tracker(c) for c in conds]
         for tr in trackers:
             tr.prime(sc.events[:sc.pos])
+        # A condition's onsets are told apart by their order in the run, not by their µs: a run
+        # again (for an input given since) repeats the onsets already stopped on a servo period or
+        # a few later or earlier (LinuxCNC's timing varies from run to run), and one moved past
+        # the stop must not count as the next occurrence (g331/single_block on a slower machine:
+        # the second stop came 1 ms later in the re-run, was taken for the third, and the third's
+        # cycle start, given 1 ms after the second's, was lost). The n-th onset of this run is new
+        # when fewer than n were stopped on.
+        told = [sum(1 for c, _ in sc.stops if same_condition(c, cond)) for cond in conds]
+        onsets = [onset_times(cond, sc.final or sc.events) for cond in conds]
         i = sc.pos
         while i < len(sc.events):
             e = sc.events[i]
@@ -300,9 +309,7 @@ class Adapter:
                 break
             for k, tr in enumerate(trackers):
                 hit = tr.see(e)
-                key = (json.dumps(conds[k], sort_keys=True), hit)
-                if hit is not None and key not in sc.fired:
-                    sc.fired.add(key)
+                if hit is not None and bisect.bisect_right(onsets[k], hit) > told[k]:
                     sc.pending += sc.events[sc.pos:i + (0 if hit < e["t_us"] else 1)]
                     sc.pos = i + (0 if hit < e["t_us"] else 1)
                     sc.now = max(sc.now, hit)
@@ -389,6 +396,16 @@ class Adapter:
 def parse_raw(e):
     """An event object with its Raw numbers kept (events are re-serialised as written)."""
     return e
+
+
+def same_condition(a, b):
+    return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+
+
+def onset_times(cond, events):
+    """Every µs at which `cond` begins to hold in a run's events, in order."""
+    tr = Tracker(cond)
+    return [h for h in (tr.see(e) for e in events) if h is not None]
 
 
 class Tracker:

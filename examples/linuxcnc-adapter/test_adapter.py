@@ -603,6 +603,33 @@ class Delivery(unittest.TestCase):
 
 
 class Conditions(unittest.TestCase):
+    def test_an_onset_moved_in_a_run_again_is_not_the_next_occurrence(self):
+        # g331/single_block on LinuxCNC's axis_mm machine: the second single-block stop at 330 ms
+        # in the run that found it, at 331 ms in the run again with its cycle start; that 331 ms
+        # was taken for the third stop, and the third cycle start given 1 ms after the second's
+        # was lost. The third is the run's third onset, at 4439 ms.
+        def spl(t, v):
+            return {"t_us": t, "kind": "signal", "name": "SPL", "value": v}
+
+        def events(second, third):
+            ev = [spl(3000, 1), spl(101000, 0), spl(second, 1)]
+            if third:
+                ev += [spl(430000, 0), spl(third, 1)]
+            return ev + [{"t_us": (third or second) + 1000, "kind": "end", "reason": "stopped"}]
+
+        a = lcnc_adapter.Adapter(Leads.Args())
+        a.sc = lcnc_adapter.Scenario({}, {"period_us": 1000})
+        runs = iter([events(330000, None), events(331000, 4439000)])
+        a.run = lambda: {"events": next(runs)}
+        stop = {"signal": "SPL", "value": 1}
+        ans = a.advance({"until_us": 10_000_000, "stop_on": [stop]})
+        self.assertEqual((ans["stopped_on"], ans["now_us"]), (0, 3000))
+        ans = a.advance({"until_us": 10_000_000, "stop_on": [stop]})
+        self.assertEqual((ans["stopped_on"], ans["now_us"]), (0, 330000))
+        a.input({"t_us": 430000, "input": {"name": "cycle_start"}})
+        ans = a.advance({"until_us": 10_000_000, "stop_on": [stop]})
+        self.assertEqual((ans["stopped_on"], ans["now_us"]), (0, 4439000))
+
     def test_an_axis_crossing_stops_at_its_interpolated_us(self):
         tr = lcnc_adapter.Tracker({"axis": "Z", "below": -1.5})
         s = lambda t, z: {"t_us": t, "kind": "sample", "axes": {"Z": lcnc_trace.Raw(lcnc_trace.dec(z, 6))}}
