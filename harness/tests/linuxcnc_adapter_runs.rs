@@ -69,6 +69,18 @@ const KEPT: &[Kept] = &[
         file: "g84_spindle_never_at_speed.jsonl.gz",
         guards: "LCNC-MOT-01 (at speed)",
     },
+    Kept {
+        scenario: "g331/emergency_stop",
+        file: "g331_emergency_stop.jsonl.gz",
+        guards: "T5 (sync cut), I5",
+    },
+    Kept { scenario: "g331/reset", file: "g331_reset.jsonl.gz", guards: "T5 (sync cut), DEC-153" },
+    Kept { scenario: "g331/g33_index", file: "g331_g33_index.jsonl.gz", guards: "DEC-157" },
+    Kept {
+        scenario: "g76/spring_passes",
+        file: "g76_spring_passes.jsonl.gz",
+        guards: "DEC-147, DEC-155, DEC-156",
+    },
 ];
 
 fn root() -> PathBuf {
@@ -374,4 +386,37 @@ fn a_g84_feeding_before_the_spindle_is_at_speed_fails() {
     });
     // The reference taps to Z-10; LinuxCNC stays at R (Z2) until the time limit.
     fails_with(&v, "LCNC-CYC-03 [CHK-ENV-01] Z position envelope");
+}
+
+/// Moves the `kind` input of `s` (a `when:` input) by `us` µs (earlier when negative).
+fn shift_input(s: &mut Scenario, kind: fn(&nc_engine::input::Input) -> bool, us: i64) {
+    let i = s.opts.inputs.inputs.iter_mut().find(|i| kind(&i.input)).expect("the input");
+    match &mut i.trigger {
+        nc_engine::input::Trigger::When { delay_us, .. } => {
+            *delay_us = delay_us.checked_add_signed(us).expect("a delay after the condition")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// An E-stop in G33.1's reversal, where the spindle brakes at 5000 rpm/s: LinuxCNC's run, given
+/// it 2 ms late, passes within 10 rpm. LinuxCNC given it 16 ms late (the adapter's E-stop
+/// before its latency was measured, I5) is the reference given it 16 ms early: the final
+/// spindle speeds are 75 rpm beyond the tolerance and it fails.
+#[test]
+fn an_e_stop_16_ms_late_in_the_reversal_fails() {
+    let v = verdict_with("g331/emergency_stop", "g331_emergency_stop.jsonl.gz", |s, _| {
+        shift_input(s, |i| matches!(i, nc_engine::input::Input::EmergencyStop(_)), -16_000)
+    });
+    fails_with(&v, "[CHK-END-01] final spindle speed");
+}
+
+/// A reset in G33.1's cut: LinuxCNC given it 35 ms late (the session's first reset before its
+/// latency was measured, I2), i.e. the reference 35 ms early, fails on where the tap stops.
+#[test]
+fn a_reset_35_ms_late_in_the_cut_fails() {
+    let v = verdict_with("g331/reset", "g331_reset.jsonl.gz", |s, _| {
+        shift_input(s, |i| matches!(i, nc_engine::input::Input::Reset), -35_000)
+    });
+    fails_with(&v, "LCNC-G331-03 [CHK-ENV-01] Z position envelope");
 }
