@@ -81,6 +81,9 @@ const KEPT: &[Kept] = &[
         file: "g76_spring_passes.jsonl.gz",
         guards: "DEC-147, DEC-155, DEC-156",
     },
+    Kept { scenario: "g331/single_block", file: "g331_single_block.jsonl.gz", guards: "DEC-158, DEC-160" },
+    Kept { scenario: "g331/no_k", file: "g331_no_k.jsonl.gz", guards: "DEC-150" },
+    Kept { scenario: "g76/reset", file: "g76_reset_pass2.jsonl", guards: "T5 (the sync cut before a reset)" },
 ];
 
 fn root() -> PathBuf {
@@ -97,8 +100,12 @@ fn machine_tolerances() -> Tolerances {
     nc_conform::input::load_tolerances(&p).expect("the adapter's tolerances")
 }
 
-/// The text of a gzip file (`gzip -n`: no name, no extra fields).
+/// The text of a kept file: JSON Lines, or JSON Lines in a gzip file (`.gz`, written by
+/// `gzip -n`: no name, no extra fields).
 fn gunzip(path: &Path) -> String {
+    if path.extension().is_none_or(|e| e != "gz") {
+        return std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    }
     let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     assert!(bytes.len() > 18 && bytes[..3] == [0x1f, 0x8b, 8], "{}: not gzip (deflate)", path.display());
     assert_eq!(bytes[3], 0, "{}: gzip header with optional fields (write it with gzip -n)", path.display());
@@ -150,7 +157,7 @@ fn every_kept_file_is_judged() {
     let mut on_disk: Vec<String> = std::fs::read_dir(runs())
         .expect("adapter-runs/")
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.ends_with(".jsonl.gz"))
+        .filter(|n| n.ends_with(".jsonl.gz") || n.ends_with(".jsonl"))
         .collect();
     on_disk.sort();
     let mut listed: Vec<String> = KEPT.iter().map(|k| k.file.to_string()).collect();
@@ -163,8 +170,32 @@ fn every_kept_file_is_judged() {
     }
 }
 
-/// Kept files judged by their own tests rather than through [`KEPT`].
-const OTHERS: &[&str] = &[];
+/// Kept files judged by their own tests rather than through [`KEPT`]: runs `conform` failed,
+/// with its verdict in `conform-verdicts.json`.
+const OTHERS: &[&str] = &["g331_overshoot.jsonl.gz", "g76_single_block_lost_start.jsonl.gz"];
+
+/// `judge_kept` is `conform`'s verdict: on runs `conform` failed (`g331/overshoot`, LinuxCNC
+/// departing from its manual, U2: expectations, synchronisation and events; a `g76/single_block`
+/// run whose last cycle start was lost), it gives the failures `conform` reported in its
+/// `report.json` (kept in `conform-verdicts.json`), the same rule, test and text, in the same
+/// order.
+#[test]
+fn the_kept_verdict_is_conform_s_verdict() {
+    let text = std::fs::read_to_string(runs().join("conform-verdicts.json")).expect("conform-verdicts.json");
+    let want: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let want = want.as_array().expect("a list");
+    assert_eq!(want.len(), OTHERS.len());
+    for w in want {
+        let file = w["file"].as_str().expect("file");
+        let name = w["scenario"].as_str().expect("scenario");
+        let scenario = name.trim_start_matches("linuxcnc/").trim_end_matches(".yaml");
+        let v = verdict_with(scenario, file, |_, _| {});
+        assert_eq!(v.name, name);
+        assert_eq!(serde_json::to_value(&v.status).expect("status"), w["status"], "{file}");
+        let got = serde_json::to_value(&v.failures).expect("failures");
+        assert_eq!(got, w["failures"], "{file}: {}", v.failure_text());
+    }
+}
 
 // ---- The reference without a fix fails on LinuxCNC's run ----
 
@@ -215,18 +246,22 @@ fn without(s: &mut Scenario, change: fn(&mut PlantConfig)) {
     s.machine.dialect = Box::leak(Box::new(Changed { inner, change }));
 }
 
-/// DEC-160: LinuxCNC's step runs `G80 M4` with the G84 line and stops only before the G74 line
-/// (three stops in all). The reference as it was before DEC-160 (`step_stops_before_motion`
-/// off: a stop after every block) stops after `G80 M4` too and fails on LinuxCNC's run.
+/// DEC-160: LinuxCNC's step runs `G80 M4` with the G84 line and stops only before the G74 line,
+/// and runs the M2 with the `G0 Z20` step after G33.1 (three stops in each). The reference as
+/// it was before DEC-160 (`step_stops_before_motion` off: a stop after every block) stops once
+/// more, where LinuxCNC never stops, and fails on both runs.
 #[test]
 fn dec160_a_reference_stopping_after_every_block_fails_on_linuxcnc_s_step() {
-    let v = verdict_with("g84/single_block", "g84_single_block.jsonl.gz", |s, _| {
-        without(s, |c| c.step_stops_before_motion = false)
-    });
-    let text = v.failure_text();
-    assert_eq!(v.status, Status::Failed, "{text}");
-    // The reference's fourth stop, after `G80 M4` (4399 ms), which LinuxCNC never makes.
-    assert!(text.contains("[CHK-EVT-02] SPL ↑ missing"), "{text}");
+    for (name, file, extra_stop) in [
+        // after `G80 M4`, before the G74 line
+        ("g84/single_block", "g84_single_block.jsonl.gz", "SPL ↑ missing at 4399 ms"),
+        // after `G0 Z20`, before the M2
+        ("g331/single_block", "g331_single_block.jsonl.gz", "SPL ↑ missing at"),
+    ] {
+        let v = verdict_with(name, file, |s, _| without(s, |c| c.step_stops_before_motion = false));
+        fails_with(&v, &format!("[CHK-EVT-02] {extra_stop}"));
+        // The same run passes the reference with DEC-160 (`every_kept_...`).
+    }
 }
 
 // ---- A trace showing the behaviour a decision ruled out fails ----
@@ -419,4 +454,15 @@ fn a_reset_35_ms_late_in_the_cut_fails() {
         shift_input(s, |i| matches!(i, nc_engine::input::Input::Reset), -35_000)
     });
     fails_with(&v, "LCNC-G331-03 [CHK-ENV-01] Z position envelope");
+}
+
+/// DEC-150: LinuxCNC reports a G33.1 without K when its read-ahead reaches the line (time 0 of
+/// the run), the G0 before it still runs. The alarm where the reference raised it before
+/// DEC-150, when the program reached line 3 (146 ms, at the G0's end), fails.
+#[test]
+fn dec150_a_read_phase_alarm_when_the_line_is_reached_fails() {
+    let v = verdict_of_text("g331/no_k", "g331_no_k.jsonl.gz", |t| {
+        moved(&t, 0, 145_999, |l| l.contains("\"kind\":\"alarm\""))
+    });
+    fails_with(&v, "[CHK-EVT-01] alarm NC-1096 raised 145.999 ms late");
 }
