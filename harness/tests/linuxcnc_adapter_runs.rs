@@ -84,6 +84,11 @@ const KEPT: &[Kept] = &[
     Kept { scenario: "g331/single_block", file: "g331_single_block.jsonl.gz", guards: "DEC-158, DEC-160" },
     Kept { scenario: "g331/no_k", file: "g331_no_k.jsonl.gz", guards: "DEC-150" },
     Kept { scenario: "g76/reset", file: "g76_reset_pass2.jsonl", guards: "T5 (the sync cut before a reset)" },
+    Kept {
+        scenario: "g76/spindle_override",
+        file: "g76_spindle_override.jsonl.gz",
+        guards: "LCNC-G76-01 (override at once)",
+    },
 ];
 
 fn root() -> PathBuf {
@@ -465,4 +470,26 @@ fn dec150_a_read_phase_alarm_when_the_line_is_reached_fails() {
         moved(&t, 0, 145_999, |l| l.contains("\"kind\":\"alarm\""))
     });
     fails_with(&v, "[CHK-EVT-01] alarm NC-1096 raised 145.999 ms late");
+}
+
+/// The spindle override acts at once on LinuxCNC, in a G76 pass as in G33.1 (its spindle
+/// command follows the override in the servo cycle; the passes after it run at 300 rpm). A
+/// reference whose override waits (`spindle_override_at_once` off) fails on both runs.
+#[test]
+fn a_spindle_override_that_waits_fails_on_linuxcnc_s_threads() {
+    for (name, file, want) in [
+        (
+            "g76/spindle_override",
+            "g76_spindle_override.jsonl.gz",
+            "LCNC-G76-01 [CHK-ENV-01] Z position envelope",
+        ),
+        (
+            "g331/spindle_override",
+            "g331_spindle_override.jsonl.gz",
+            "LCNC-G331-01 [CHK-ENV-01] Z position envelope",
+        ),
+    ] {
+        let v = verdict_with(name, file, |s, _| without(s, |c| c.spindle_override_at_once = false));
+        fails_with(&v, want);
+    }
 }
