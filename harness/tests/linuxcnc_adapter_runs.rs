@@ -89,6 +89,8 @@ const KEPT: &[Kept] = &[
         file: "g76_spindle_override.jsonl.gz",
         guards: "LCNC-G76-01 (override at once)",
     },
+    Kept { scenario: "g76/single_block", file: "g76_single_block.jsonl.gz", guards: "DEC-158, DEC-160" },
+    Kept { scenario: "cycles/g88", file: "cycles_g88.jsonl.gz", guards: "DEC-151" },
 ];
 
 fn root() -> PathBuf {
@@ -252,7 +254,8 @@ fn without(s: &mut Scenario, change: fn(&mut PlantConfig)) {
 }
 
 /// DEC-160: LinuxCNC's step runs `G80 M4` with the G84 line and stops only before the G74 line,
-/// and runs the M2 with the `G0 Z20` step after G33.1 (three stops in each). The reference as
+/// and runs the M2 with the `G0 Z20` step after G33.1 and with the `G0 X20` step after G76 (three
+/// stops in each). The reference as
 /// it was before DEC-160 (`step_stops_before_motion` off: a stop after every block) stops once
 /// more, where LinuxCNC never stops, and fails on both runs.
 #[test]
@@ -262,6 +265,8 @@ fn dec160_a_reference_stopping_after_every_block_fails_on_linuxcnc_s_step() {
         ("g84/single_block", "g84_single_block.jsonl.gz", "SPL ↑ missing at 4399 ms"),
         // after `G0 Z20`, before the M2
         ("g331/single_block", "g331_single_block.jsonl.gz", "SPL ↑ missing at"),
+        // after `G0 X20`, before the M2
+        ("g76/single_block", "g76_single_block.jsonl.gz", "SPL ↑ missing at"),
     ] {
         let v = verdict_with(name, file, |s, _| without(s, |c| c.step_stops_before_motion = false));
         fails_with(&v, &format!("[CHK-EVT-02] {extra_stop}"));
@@ -492,4 +497,19 @@ fn a_spindle_override_that_waits_fails_on_linuxcnc_s_threads() {
         let v = verdict_with(name, file, |s, _| without(s, |c| c.spindle_override_at_once = false));
         fails_with(&v, want);
     }
+}
+
+/// DEC-151: after G88's program stop and the cycle start, LinuxCNC leaves the tool at the bottom
+/// (Z-5) and ends there. The reference as it was before DEC-151 (DEC-85: a rapid to the
+/// clearance level, Z10 under G98, once cycle start is pressed), run here as the program with
+/// that rapid written out on the line after the cycle, fails on LinuxCNC's run.
+#[test]
+fn dec151_a_retract_after_g88_s_cycle_start_fails() {
+    let v = verdict_with("cycles/g88", "cycles_g88.jsonl.gz", |s, p| {
+        with_program(s, p, |t| t.replace("G80 M2", "G0 Z10 M2"))
+    });
+    // The reference's rapid delays its M2 by 243 ms. (LinuxCNC's recording ends before the
+    // reference's rapid does: the positions after its last sample, and the end positions, are
+    // judged by the scenario's expectations only, L-125.)
+    fails_with(&v, "[CHK-EVT-01] M2 output 243 ms early");
 }
