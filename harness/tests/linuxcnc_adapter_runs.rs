@@ -16,8 +16,10 @@ use nc_conform::scenario::load::{self, Scenario};
 use nc_engine::dialect::{Dialect, Interpreter};
 use nc_engine::exec::PlantConfig;
 use nc_engine::params::{ParamDef, Params};
-use nc_engine::parse::{LexRules, ParseError, Program};
+use nc_engine::parse::{Block, LexRules, ParseError, Program};
+use nc_engine::plan::{FollowKind, Pos, Step};
 use nc_engine::trace::AxisSpec;
+use nc_engine::Alarm;
 
 /// One kept run: the scenario (under `scenarios/linuxcnc/`), its file (`adapter-runs/`), and the
 /// decisions whose behaviour it shows.
@@ -206,11 +208,14 @@ fn the_kept_verdict_is_conform_s_verdict() {
 
 // ---- The reference without a fix fails on LinuxCNC's run ----
 
-/// A dialect that is another with its plant settings changed: the reference without a fix.
+/// A dialect that is another with its plant settings changed, or its interpreter's steps: the
+/// reference without a fix.
 #[derive(Debug)]
 struct Changed {
     inner: &'static dyn Dialect,
     change: fn(&mut PlantConfig),
+    /// Whether the interpreter's step `k` of a block's steps is left out.
+    drop_step: fn(&[Step], usize) -> bool,
 }
 
 impl Dialect for Changed {
@@ -232,11 +237,52 @@ impl Dialect for Changed {
         c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {
-        self.inner.interpreter(params)
+        Box::new(Filtered { inner: self.inner.interpreter(params), drop_step: self.drop_step })
     }
     fn parse(&self, text: &str) -> Result<Program, ParseError> {
         self.inner.parse(text)
     }
+}
+
+/// An interpreter whose blocks' steps [`Changed::drop_step`] picks are left out.
+struct Filtered {
+    inner: Box<dyn Interpreter>,
+    drop_step: fn(&[Step], usize) -> bool,
+}
+
+impl Interpreter for Filtered {
+    fn block(&mut self, block: &Block, out: &mut Vec<Step>) -> Result<(), Alarm> {
+        let start = out.len();
+        let r = self.inner.block(block, out);
+        let steps: Vec<Step> = out.drain(start..).collect();
+        out.extend(
+            steps.iter().enumerate().filter(|(k, _)| !(self.drop_step)(&steps, *k)).map(|(_, s)| s.clone()),
+        );
+        r
+    }
+    fn reset(&mut self, pos: Pos) {
+        self.inner.reset(pos)
+    }
+    fn set_position(&mut self, pos: Pos) {
+        self.inner.set_position(pos)
+    }
+    fn modal(&self) -> Vec<String> {
+        self.inner.modal()
+    }
+    fn rigid_mode(&self) -> bool {
+        self.inner.rigid_mode()
+    }
+    fn set_params(&mut self, params: &Params) {
+        self.inner.set_params(params)
+    }
+    fn program(&mut self, program: &Program) {
+        self.inner.program(program)
+    }
+}
+
+/// No step left out.
+fn keep_all(_: &[Step], _: usize) -> bool {
+    false
 }
 
 /// `s` running its program text changed by `change` (the scenario file at `path`).
@@ -250,7 +296,13 @@ fn with_program(s: &mut Scenario, path: &Path, change: impl FnOnce(&str) -> Stri
 /// `s`'s machine with its plant settings changed by `change`.
 fn without(s: &mut Scenario, change: fn(&mut PlantConfig)) {
     let inner = s.machine.dialect;
-    s.machine.dialect = Box::leak(Box::new(Changed { inner, change }));
+    s.machine.dialect = Box::leak(Box::new(Changed { inner, change, drop_step: keep_all }));
+}
+
+/// `s`'s interpreter with the steps `drop_step` picks left out.
+fn without_steps(s: &mut Scenario, drop_step: fn(&[Step], usize) -> bool) {
+    let inner = s.machine.dialect;
+    s.machine.dialect = Box::leak(Box::new(Changed { inner, change: |_| {}, drop_step }));
 }
 
 /// DEC-160: LinuxCNC's step runs `G80 M4` with the G84 line and stops only before the G74 line,
@@ -512,4 +564,27 @@ fn dec151_a_retract_after_g88_s_cycle_start_fails() {
     // reference's rapid does: the positions after its last sample, and the end positions, are
     // judged by the scenario's expectations only, L-125.)
     fails_with(&v, "[CHK-EVT-01] M2 output 243 ms early");
+}
+
+/// DEC-157: G33.1's move back is not synchronised on LinuxCNC (tp.c FINAL_REVERSAL), so a feed
+/// hold given during the tap, or on the way out, holds the tap where it turned round past the
+/// start (Z 5.346), before it moves back to Z5. The reference as it was before DEC-157 (the hold
+/// suppressed to the end of the whole tap: the `HoldSuppress(false)` before the unsynchronised
+/// move back left out) holds at Z5 and fails on both LinuxCNC runs.
+#[test]
+fn dec157_a_hold_deferred_to_the_end_of_the_tap_fails() {
+    fn lifted_before_the_move_back(steps: &[Step], k: usize) -> bool {
+        matches!(steps[k], Step::HoldSuppress(false))
+            && matches!(steps.get(k + 1), Some(Step::Follow(f)) if f.kind == FollowKind::Unsynced)
+    }
+    for (name, file) in [
+        ("g331/feed_hold_deferred", "g331_feed_hold_deferred.jsonl.gz"),
+        ("g331/feed_hold_in_way_out", "g331_feed_hold_in_way_out.jsonl.gz"),
+    ] {
+        // The wrapper itself changes nothing: every step kept, the run passes.
+        let v = verdict_with(name, file, |s, _| without_steps(s, keep_all));
+        assert_eq!(v.status, Status::Passed, "{}", v.failure_text());
+        let v = verdict_with(name, file, |s, _| without_steps(s, lifted_before_the_move_back));
+        fails_with(&v, "LCNC-G331-03 [CHK-ENV-01] Z position envelope");
+    }
 }
