@@ -497,9 +497,10 @@ fn shift_input(s: &mut Scenario, kind: fn(&nc_engine::input::Input) -> bool, us:
 }
 
 /// An E-stop in G33.1's reversal, where the spindle brakes at 5000 rpm/s: LinuxCNC's run, given
-/// it 2 ms late, passes within 10 rpm. LinuxCNC given it 16 ms late (the adapter's E-stop
-/// before its latency was measured, I5) is the reference given it 16 ms early: the final
-/// spindle speeds are 75 rpm beyond the tolerance and it fails.
+/// it through HAL in its servo cycle (the adapter's `estop_at`), passes within 10 rpm (its final
+/// speed -118 rpm, the reference's bound -120). LinuxCNC given it 16 ms late (the adapter's
+/// E-stop through the task before its latency was measured, I5) is the reference given it 16 ms
+/// early: 63 rpm beyond the tolerance, it fails (4 ms already fails by 12 rpm).
 #[test]
 fn an_e_stop_16_ms_late_in_the_reversal_fails() {
     let v = verdict_with("g331/emergency_stop", "g331_emergency_stop.jsonl.gz", |s, _| {
