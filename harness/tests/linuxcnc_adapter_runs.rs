@@ -589,3 +589,22 @@ fn dec157_a_hold_deferred_to_the_end_of_the_tap_fails() {
         fails_with(&v, "LCNC-G331-03 [CHK-ENV-01] Z position envelope");
     }
 }
+
+/// What `conform` refuses from a controller, `judge_kept` refuses: events out of time order, an
+/// event after `end`, no `end`, an event that is not one; never a panic.
+#[test]
+fn a_kept_file_conform_would_refuse_is_an_input_error() {
+    let (s, path) = scenario("g331/reset");
+    let text = gunzip(&runs().join("g331_reset.jsonl.gz"));
+    let lines: Vec<&str> = text.lines().collect();
+    let n = lines.len();
+    // the last sample before the end moved to the front
+    let swapped = [&lines[n - 2..n - 1], &lines[..n - 2], &lines[n - 1..]].concat().join("\n");
+    let after_end = format!("{text}{}\n", lines[n - 2]);
+    let no_end = lines[..n - 1].join("\n");
+    let garbage = text.replacen("\"kind\":\"sample\"", "\"kind\":\"sampel\"", 1);
+    for (what, bad) in [("order", swapped), ("after end", after_end), ("no end", no_end), ("kind", garbage)] {
+        let r = judge_kept(&s, &path, &machine_tolerances(), "bad.jsonl", &bad);
+        assert!(r.is_err(), "{what}: judged");
+    }
+}

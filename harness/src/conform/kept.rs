@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use nc_engine::trace::{Event, Trace};
+use nc_engine::trace::{Event, Trace, TraceEvent};
 
 use super::drive::{self, Driven};
 use super::verdict::{judge, ScenarioVerdict};
@@ -29,7 +29,8 @@ use crate::scenario::load::Scenario;
 /// # Errors
 ///
 /// The scenario's program or tolerance file cannot be read; an event of the kept text is not a
-/// trace event; the events do not end with an `end` event.
+/// trace event; the events are out of time order or do not end with one `end` event (what
+/// `conform` takes as a protocol error).
 pub fn judge_kept(
     s: &Scenario,
     path: &Path,
@@ -51,12 +52,22 @@ pub fn judge_kept(
     let opts = import::Options { format: Some(Format::Jsonl), ..Default::default() };
     let reader = import::from_reader(kept_name, Box::new(std::io::Cursor::new(text.into_bytes())), &opts)
         .map_err(|e| InputError::new(kept_name, e.message))?;
-    let mut events = Vec::new();
+    let mut events: Vec<TraceEvent> = Vec::new();
     for r in reader {
         // Line 1 is the meta line added here: event k is line k + 1.
         let ev = r.map_err(|e| {
             InputError::new(kept_name, format!("event {}: {}", e.line.saturating_sub(1), e.message))
         })?;
+        // As the harness takes a controller's events (`drive`): in time order, nothing after `end`.
+        if let Some(last) = events.last() {
+            if matches!(last.event, Event::End(_)) {
+                return Err(InputError::new(kept_name, "an event after the `end` event"));
+            }
+            if ev.t_us < last.t_us {
+                let m = format!("events out of time order: {} µs after {} µs", ev.t_us, last.t_us);
+                return Err(InputError::new(kept_name, m));
+            }
+        }
         events.push(ev);
     }
     if !events.last().is_some_and(|e| matches!(e.event, Event::End(_))) {
