@@ -17,7 +17,7 @@ use nc_engine::dialect::{Dialect, Interpreter};
 use nc_engine::exec::PlantConfig;
 use nc_engine::params::{ParamDef, Params};
 use nc_engine::parse::{Block, LexRules, ParseError, Program};
-use nc_engine::plan::{FollowKind, Pos, Step};
+use nc_engine::plan::{FollowKind, PassLaw, Pos, Step};
 use nc_engine::trace::AxisSpec;
 use nc_engine::Alarm;
 
@@ -93,6 +93,7 @@ const KEPT: &[Kept] = &[
     },
     Kept { scenario: "g76/single_block", file: "g76_single_block.jsonl.gz", guards: "DEC-158, DEC-160" },
     Kept { scenario: "cycles/g88", file: "cycles_g88.jsonl.gz", guards: "DEC-151" },
+    Kept { scenario: "g76/passes", file: "g76_passes.jsonl.gz", guards: "DEC-147" },
 ];
 
 fn root() -> PathBuf {
@@ -214,8 +215,8 @@ fn the_kept_verdict_is_conform_s_verdict() {
 struct Changed {
     inner: &'static dyn Dialect,
     change: fn(&mut PlantConfig),
-    /// Whether the interpreter's step `k` of a block's steps is left out.
-    drop_step: fn(&[Step], usize) -> bool,
+    /// The interpreter's steps of each block, changed.
+    edit: fn(Vec<Step>) -> Vec<Step>,
 }
 
 impl Dialect for Changed {
@@ -237,27 +238,25 @@ impl Dialect for Changed {
         c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {
-        Box::new(Filtered { inner: self.inner.interpreter(params), drop_step: self.drop_step })
+        Box::new(Edited { inner: self.inner.interpreter(params), edit: self.edit })
     }
     fn parse(&self, text: &str) -> Result<Program, ParseError> {
         self.inner.parse(text)
     }
 }
 
-/// An interpreter whose blocks' steps [`Changed::drop_step`] picks are left out.
-struct Filtered {
+/// An interpreter whose blocks' steps [`Changed::edit`] changes.
+struct Edited {
     inner: Box<dyn Interpreter>,
-    drop_step: fn(&[Step], usize) -> bool,
+    edit: fn(Vec<Step>) -> Vec<Step>,
 }
 
-impl Interpreter for Filtered {
+impl Interpreter for Edited {
     fn block(&mut self, block: &Block, out: &mut Vec<Step>) -> Result<(), Alarm> {
         let start = out.len();
         let r = self.inner.block(block, out);
         let steps: Vec<Step> = out.drain(start..).collect();
-        out.extend(
-            steps.iter().enumerate().filter(|(k, _)| !(self.drop_step)(&steps, *k)).map(|(_, s)| s.clone()),
-        );
+        out.extend((self.edit)(steps));
         r
     }
     fn reset(&mut self, pos: Pos) {
@@ -280,9 +279,9 @@ impl Interpreter for Filtered {
     }
 }
 
-/// No step left out.
-fn keep_all(_: &[Step], _: usize) -> bool {
-    false
+/// The steps as they are.
+fn unchanged(steps: Vec<Step>) -> Vec<Step> {
+    steps
 }
 
 /// `s` running its program text changed by `change` (the scenario file at `path`).
@@ -296,13 +295,13 @@ fn with_program(s: &mut Scenario, path: &Path, change: impl FnOnce(&str) -> Stri
 /// `s`'s machine with its plant settings changed by `change`.
 fn without(s: &mut Scenario, change: fn(&mut PlantConfig)) {
     let inner = s.machine.dialect;
-    s.machine.dialect = Box::leak(Box::new(Changed { inner, change, drop_step: keep_all }));
+    s.machine.dialect = Box::leak(Box::new(Changed { inner, change, edit: unchanged }));
 }
 
-/// `s`'s interpreter with the steps `drop_step` picks left out.
-fn without_steps(s: &mut Scenario, drop_step: fn(&[Step], usize) -> bool) {
+/// `s`'s interpreter with each block's steps changed by `edit`.
+fn with_steps(s: &mut Scenario, edit: fn(Vec<Step>) -> Vec<Step>) {
     let inner = s.machine.dialect;
-    s.machine.dialect = Box::leak(Box::new(Changed { inner, change: |_| {}, drop_step }));
+    s.machine.dialect = Box::leak(Box::new(Changed { inner, change: |_| {}, edit }));
 }
 
 /// DEC-160: LinuxCNC's step runs `G80 M4` with the G84 line and stops only before the G74 line,
@@ -574,18 +573,21 @@ fn dec151_a_retract_after_g88_s_cycle_start_fails() {
 /// move back left out) holds at Z5 and fails on both LinuxCNC runs.
 #[test]
 fn dec157_a_hold_deferred_to_the_end_of_the_tap_fails() {
-    fn lifted_before_the_move_back(steps: &[Step], k: usize) -> bool {
-        matches!(steps[k], Step::HoldSuppress(false))
-            && matches!(steps.get(k + 1), Some(Step::Follow(f)) if f.kind == FollowKind::Unsynced)
+    fn not_lifted_before_the_move_back(steps: Vec<Step>) -> Vec<Step> {
+        let lifts = |k: usize| {
+            matches!(steps[k], Step::HoldSuppress(false))
+                && matches!(steps.get(k + 1), Some(Step::Follow(f)) if f.kind == FollowKind::Unsynced)
+        };
+        (0..steps.len()).filter(|&k| !lifts(k)).map(|k| steps[k].clone()).collect()
     }
     for (name, file) in [
         ("g331/feed_hold_deferred", "g331_feed_hold_deferred.jsonl.gz"),
         ("g331/feed_hold_in_way_out", "g331_feed_hold_in_way_out.jsonl.gz"),
     ] {
         // The wrapper itself changes nothing: every step kept, the run passes.
-        let v = verdict_with(name, file, |s, _| without_steps(s, keep_all));
+        let v = verdict_with(name, file, |s, _| with_steps(s, unchanged));
         assert_eq!(v.status, Status::Passed, "{}", v.failure_text());
-        let v = verdict_with(name, file, |s, _| without_steps(s, lifted_before_the_move_back));
+        let v = verdict_with(name, file, |s, _| with_steps(s, not_lifted_before_the_move_back));
         fails_with(&v, "LCNC-G331-03 [CHK-ENV-01] Z position envelope");
     }
 }
@@ -607,4 +609,28 @@ fn a_kept_file_conform_would_refuse_is_an_input_error() {
         let r = judge_kept(&s, &path, &machine_tolerances(), "bad.jsonl", &bad);
         assert!(r.is_err(), "{what}: judged");
     }
+}
+
+/// DEC-147: LinuxCNC ends each synchronised segment of a G76 pass with tapers (E2 L2) at rest,
+/// and the next starts from rest behind the spindle and catches it up. The reference before
+/// DEC-147 (the pass one accelerated synchronised move through its joints,
+/// `PassLaw::Accelerated`) fails on LinuxCNC's `g76/passes` on the synchronisation.
+#[test]
+fn dec147_a_g76_pass_blended_through_its_taper_joints_fails() {
+    fn blended(steps: Vec<Step>) -> Vec<Step> {
+        steps
+            .into_iter()
+            .map(|s| match s {
+                Step::Thread(p) if p.law == PassLaw::Segments => Step::Thread(nc_engine::plan::ThreadPass {
+                    law: PassLaw::Accelerated { room: None },
+                    ..p
+                }),
+                other => other,
+            })
+            .collect()
+    }
+    let file = "g76_passes.jsonl.gz";
+    let v = verdict_with("g76/passes", file, |s, _| with_steps(s, blended));
+    // 0.247 mm out of sync 17 ms into the taper of every pass (DEC-147: 0.251 mm).
+    fails_with(&v, "LCNC-G76-01 [CHK-SYNC-01] Z synchronisation with the spindle, thread pass 1 (lead)");
 }
