@@ -45,6 +45,28 @@ class Clock:
         return int(round(hal.get_value("servo_clock.out") / self.period_s))
 
 
+# The E-stop a HAL comparator gives at a servo cycle (lcnc_machine.HAL_TEMPLATE: estop_at drops
+# motion.enable and the spindle command in that cycle); its message is the E-stop's own echo.
+ESTOP_DISARMED = "1e12"
+ESTOP_ECHO = "motion stopped by enable input"
+
+
+def hal_estop():
+    """Whether the machine's HAL has the E-stop comparator (a user's own HAL may not: the
+    E-stop then goes through the task, ~16 ms late where its latency is not yet measured)."""
+    try:
+        hal.get_value("estop_at.out")
+        return True
+    except Exception:
+        return False
+
+
+def arm_estop(trip, period_s):
+    """E-stop from servo cycle `trip` on: estop_at runs first in the cycle, on the clock of the
+    cycle before (`trip` - 1), so its threshold lies half a period below that."""
+    hal.set_p("estop_at.in0", repr((trip - 1.5) * period_s))
+
+
 def errors(sink, clock):
     """LinuxCNC's operator messages since the last call, stamped."""
     while True:
@@ -121,6 +143,10 @@ def prepare(msgs, clock, path_mode="G64"):
     c.abort()
     c.wait_complete(2.0)
     hal.set_p("stall.sel", "0")
+    if hal_estop():
+        # motion's enable back on before the machine is (an E-stop of the last run left it off)
+        hal.set_p("estop_at.in0", ESTOP_DISARMED)
+        time.sleep(0.01)
     machine_on(msgs, clock)
     c.mode(linuxcnc.MODE_MDI)
     c.wait_complete()
@@ -250,6 +276,9 @@ class Run:
         self.restepped = None
         self.start_paused = False  # single block: the start's pause before line 1, not left yet
         self.commanders = COMMANDERS
+        # the E-stop given through HAL (estop_at): the servo cycle it is armed for, once armed
+        self.estop_trip = self.estop_due = self.estop_input = None
+        self.hal_estop = hal_estop()
 
     def snapshot(self):
         """The outputs whose first change marks the program's start (t = 0)."""
@@ -312,6 +341,14 @@ class Run:
         else:
             return f"LinuxCNC has no counterpart of the `{name}` input"
         g = {"cycle": before, "sent": before, "due": cycle_due, "input": inp}
+        if name == "emergency_stop" and inp["on"] and self.estop_trip is not None:
+            # HAL stopped motion and the spindle at the armed cycle; the task is told as well (its
+            # E-stop state, the alarm), ~16 ms later
+            g["cycle"] = g["sent"] = self.estop_trip
+            g["hal"] = True
+            self.commanders.send(cmd)
+            self.given.append(g)
+            return None
         if cmd is not None:
             if direct:
                 # before the start: on time whenever the task takes it (its latency is still
@@ -450,11 +487,16 @@ class Run:
                 # run command + the lead an earlier run showed
                 t0 = now if looks > 1 else min(now, t0_guess)
             base = t0 if t0 is not None else t0_guess
+            self.arm_estop(pending, base, now)
             while pending:
                 p = pending[0]
                 due = base + int(round(p["t_us"] / self.period_us))
                 lead = int(round(p.get("lead_us", 0) / self.period_us))
-                if now < due - lead:
+                if self.estop_trip is not None and p is self.estop_input:
+                    # given through HAL at its cycle: no lead, given once HAL has acted
+                    if not hal.get_value("estop_at.out"):
+                        break
+                elif now < due - lead:
                     break
                 pending.pop(0)
                 why = self.give(p["input"], due)
@@ -463,6 +505,7 @@ class Run:
                 if p["input"]["name"] == "reset":
                     reset_at = now
             running = st[0] != linuxcnc.INTERP_IDLE
+            hal_stopped = any(g.get("hal") for g in self.given)
             # started: seen running, or an output changed, or still idle 200 ms after the run
             # command (an error before the first block ends it at once)
             started = started or running or t0 is not None or now - c_run > 200 * per_ms
@@ -475,8 +518,12 @@ class Run:
             elif now - c_run >= budget_cycles:
                 c.abort()
                 end = {"reason": "over_budget", "cycle": now}
-            elif st[2] == linuxcnc.STATE_ESTOP:
+            elif st[2] == linuxcnc.STATE_ESTOP or (hal_stopped and now - self.estop_trip > 1000 * per_ms):
                 end = {"reason": "alarm", "cycle": now, "estop": True}
+            elif hal_stopped:
+                # motion stopped by HAL's E-stop: the task aborts the program (its interpreter
+                # idle, not a program end) and takes the E-stop state once its command arrives
+                pass
             elif started and not running and reset_at is None:
                 end = self.settle({"reason": "program_end", "cycle": now})
             elif st[1]:
@@ -506,6 +553,20 @@ class Run:
             c.abort()
         return self.finish(out, sampler, {"end": end, "t0": t0, "c_run": c_run, "restepped": self.restepped})
 
+    def arm_estop(self, pending, base, now):
+        """Arms HAL's E-stop for the next E-stop input at its servo cycle (at once when that has
+        passed: two cycles on, the one running may be past estop_at already); again when time 0,
+        which the cycle counts from, is found after a guess. Not once it has acted."""
+        if not self.hal_estop or (self.estop_trip is not None and hal.get_value("estop_at.out")):
+            return
+        p = next((p for p in pending if p["input"]["name"] == "emergency_stop" and p["input"].get("on")), None)
+        if p is None:
+            return
+        due = base + int(round(p["t_us"] / self.period_us))
+        if self.estop_trip is None or due != self.estop_due:
+            self.estop_trip, self.estop_due, self.estop_input = max(due, now + 2), due, p
+            arm_estop(self.estop_trip, self.clock.period_s)
+
     def settle(self, end):
         """After the program's end: record until the spindle stands and the axes are in position
         (the reference's end comes once the spindle has stopped), at most 30 s."""
@@ -527,6 +588,9 @@ class Run:
         sampler.wait()
         out.close()
         errors(self.msgs, self.clock)
+        if any(g.get("hal") for g in self.given):
+            # motion's own report of the E-stop HAL gave is not an alarm of the program's
+            self.msgs = [m for m in self.msgs if m["text"].strip() != ESTOP_ECHO]
         s.poll()
         self.acks()
         for g in self.given:

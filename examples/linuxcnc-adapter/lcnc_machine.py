@@ -244,13 +244,14 @@ loadrt limit2 names=limit_speed
 loadrt lowpass names=spindle_mass
 loadrt near names=near_speed
 loadrt scale names=rpm_rps
-loadrt mux2 names=stall
+loadrt mux2 names=stall,estop_spindle
 setp rpm_rps.gain .0167
 setp limit_speed.maxv @SPINDLE_ACC@
 net spindle-index-enable spindle.0.index-enable <=> sim_spindle.index-enable
 net spindle-pos sim_spindle.position-fb => spindle.0.revs
 setp spindle_mass.gain .07
-net spindle-speed-cmd spindle.0.speed-out => limit_speed.in
+net spindle-speed-cmd spindle.0.speed-out => estop_spindle.in0
+net spindle-speed-estop estop_spindle.out => limit_speed.in
 net spindle-speed-drive limit_speed.out => stall.in0
 setp stall.in1 0
 setp stall.sel 0
@@ -265,6 +266,7 @@ setp near_speed.difference 0.5
 net spindle-speed-cmd => near_speed.in1
 net spindle-speed-limited => near_speed.in2
 net spindle-at-speed near_speed.out spindle.0.at-speed
+addf estop_spindle servo-thread
 addf limit_speed servo-thread
 addf stall servo-thread
 addf spindle_mass servo-thread
@@ -277,6 +279,21 @@ loadrt integ names=servo_clock
 setp servo_clock.in 1
 addf servo_clock servo-thread
 
+# E-stop at a servo cycle (the `emergency_stop` input), as an E-stop chain wired to motion's
+# enable: the agent sets estop_at.in0 to the servo time before the cycle; from that cycle on
+# motion.enable is false (motion stops in that cycle: control.c check_for_faults, then
+# set_operating_mode clears the planner) and the spindle command is 0, braking through its ramp (as
+# the task's E-stop does, emcSpindleAbort). estop_at and estop_ok run first in the servo cycle (on
+# the clock of the cycle before), estop_spindle between motion and the spindle's ramp.
+loadrt comp names=estop_at
+loadrt not names=estop_ok
+setp estop_at.in0 1e12
+setp estop_spindle.in1 0
+net estop-trip estop_at.out => estop_ok.in estop_spindle.sel
+net estop-ok estop_ok.out => motion.enable
+addf estop_at servo-thread 1
+addf estop_ok servo-thread 2
+
 # every servo cycle into the sampler FIFO (read by halsampler); columns: see lcnc_trace.COLUMNS
 loadrt sampler depth=65536 cfg=fffffffbbbbbbbbss
 setp sampler.0.enable 0
@@ -286,7 +303,7 @@ net Zpos => sampler.0.pin.2
 net spindle-speed-limited => sampler.0.pin.3
 net spindle-pos => sampler.0.pin.4
 net spindle-speed-cmd => sampler.0.pin.5
-net clock servo_clock.out => sampler.0.pin.6
+net clock servo_clock.out => sampler.0.pin.6 estop_at.in1
 net sp-on spindle.0.on => sampler.0.pin.7
 net sp-fwd spindle.0.forward => sampler.0.pin.8
 net sp-rev spindle.0.reverse => sampler.0.pin.9

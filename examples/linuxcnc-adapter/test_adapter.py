@@ -110,6 +110,38 @@ class MachineConfig(unittest.TestCase):
         self.assertIn("G61.1", exact)
         self.assertNotIn("ARC_BLEND_OPTIMIZATION_DEPTH", ini)
 
+    def test_an_e_stop_acts_in_the_servo_cycle_it_is_armed_for(self):
+        # HAL's E-stop (estop_at): every module loaded once (a second loadrt of one fails), the
+        # comparator and its inverter first in the servo cycle, before motion reads its enable;
+        # the spindle command cut between motion and the spindle's ramp
+        _, hal, _ = lcnc_machine.machine_config([])
+        lines = hal.splitlines()
+        mods = [l.split()[1] for l in lines if l.startswith("loadrt ")]
+        self.assertEqual(len(mods), len(set(mods)), mods)
+        order = []
+        for l in lines:
+            if l.startswith("addf "):
+                parts = l.split()
+                if len(parts) > 3:
+                    order.insert(int(parts[3]) - 1, parts[1])
+                else:
+                    order.append(parts[1])
+        self.assertEqual(order[:3], ["estop_at", "estop_ok", "motion-command-handler"])
+        self.assertLess(order.index("motion-controller"), order.index("estop_spindle"))
+        self.assertLess(order.index("estop_spindle"), order.index("limit_speed"))
+        self.assertLess(order.index("servo_clock"), order.index("sampler.0"))
+        self.assertIn("net estop-ok estop_ok.out => motion.enable", hal)
+        self.assertIn("net spindle-speed-cmd spindle.0.speed-out => estop_spindle.in0", hal)
+        self.assertIn("net spindle-speed-estop estop_spindle.out => limit_speed.in", hal)
+        self.assertIn("estop_at.in1", next(l for l in lines if l.startswith("net clock ")))
+        # armed for cycle k (the agent's arm_estop), the comparator, on the clock the cycle before
+        # left (servo_clock runs after it), trips in cycle k and not in k - 1
+        for period_s in (0.001, 0.002, 0.00025):
+            for k in (2, 8889, 10**7):
+                in0 = agent_arm_estop(k, period_s)
+                self.assertFalse((k - 2) * period_s > in0, (k, period_s))
+                self.assertTrue((k - 1) * period_s > in0, (k, period_s))
+
     def test_an_exited_linuxcnc_not_yet_reaped_is_not_running(self):
         # another engineer's LinuxCNC left zombies for minutes; they hold nothing
         import time
@@ -172,6 +204,27 @@ def row(cycle, z=0.0, rpm=0.0, revs=0.0, cmd=0.0, on=0, fwd=0, rev=0, line=0, mt
     return {"n": cycle, "X": 0.0, "Y": 0.0, "Z": z, "rpm": rpm, "revs": revs, "speed_cmd": cmd,
             "clock": cycle / 1000.0, "on": on, "fwd": fwd, "rev": rev, "at_speed": 0, "index": index,
             "inpos": 1, "flood": 0, "mist": 0, "line": line, "mtype": mtype, "cycle": cycle}
+
+
+def agent_arm_estop(trip, period_s):
+    """The threshold the agent's arm_estop gives estop_at.in0 for an E-stop in cycle `trip`, its
+    source run with a stand-in for LinuxCNC's hal module."""
+    import ast
+
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "lcnc_agent.py")) as f:
+        tree = ast.parse(f.read())
+    fn = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == "arm_estop")
+    set_p = {}
+
+    class Hal:
+        @staticmethod
+        def set_p(name, value):
+            set_p[name] = value
+
+    scope = {"hal": Hal}
+    exec(compile(ast.Module(body=[fn], type_ignores=[]), "lcnc_agent.py", "exec"), scope)
+    scope["arm_estop"](trip, period_s)
+    return float(set_p["estop_at.in0"])
 
 
 def power_on_mdi():

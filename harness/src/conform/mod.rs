@@ -13,10 +13,12 @@
 //!   `when:` inputs act on the controller's own outputs at their exact time;
 //! - [`verdict`]: the scenario's expectations on the controller's trace, and the controller's
 //!   trace compared with the reference's by [`crate::check`];
+//! - [`kept`]: a controller's trace kept in a file, judged again as [`verdict`] judged it;
 //! - [`suite`]: every scenario of a directory, the summary per rule id, JUnit and JSON reports,
 //!   and the libtest-mimic entry behind [`crate::conformance_suite!`].
 
 pub mod drive;
+pub mod kept;
 pub mod process;
 pub mod reference;
 pub mod serve;

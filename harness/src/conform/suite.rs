@@ -110,8 +110,7 @@ pub fn run_one_on(
             seconds: 0.0,
         });
     }
-    let side = path.with_extension("check.yaml");
-    let tolerances = if side.is_file() { crate::input::load_tolerances(&side)? } else { machine.clone() };
+    let tolerances = tolerances_of(path, machine)?;
     let program = match &s.refusal {
         Some((_, _, text)) => text.clone(),
         None => drive::program_text(path, name)?,
@@ -124,6 +123,21 @@ pub fn run_one_on(
     };
     v.seconds = started.elapsed().as_secs_f64();
     Ok(v)
+}
+
+/// The tolerances a scenario is judged within: its own `.check.yaml` next to it when it has one
+/// (the scenario's statement), else the machine's (`conform --tolerances`).
+///
+/// # Errors
+///
+/// The scenario's `.check.yaml` is bad.
+pub fn tolerances_of(path: &Path, machine: &Tolerances) -> Result<Tolerances, InputError> {
+    let side = path.with_extension("check.yaml");
+    if side.is_file() {
+        crate::input::load_tolerances(&side)
+    } else {
+        Ok(machine.clone())
+    }
 }
 
 /// The outcome of a whole suite.
