@@ -658,7 +658,11 @@ class Trace:
             self.hold_still = False
         elif getattr(self, "pause_pending", False) or self.levels["SPL"] or getattr(self, "hold_still", False):
             # a feed hold's standstill, until motion goes on after the cycle start, is not the
-            # hole's bottom
+            # hole's bottom; but G88's own program stop comes after its dwell and its spindle stop
+            # (rs274: DWELL, STOP_SPINDLE_TURNING, PROGRAM_STOP), and the task may report it in the
+            # servo cycle the trace's dwell count ends or before: the spindle off, the dwell is over
+            if ph == "dwell" and kind == "cycle88" and not r["on"]:
+                self.set_phase(t, "retract")
             self.hold_still = True
             return
         if ph in ("positioning", "retract") and moving and mtype == MOTION_FEED and d < 0:
