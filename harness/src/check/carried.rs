@@ -107,10 +107,9 @@ impl Carried {
     /// 6. the first motion of the axis that moves first in the reference (a recorded one);
     /// 7. none: offset 0.
     pub fn default_anchor(&self, r: &Reference) -> Anchor {
-        let reference = &r.trace;
         let tap_slot = r.tap.map(|t| t.slot);
-        let m29 = reference.functions().any(|(_, l, c)| l == 'M' && c == 29);
-        let rises = |s: Signal| self.declares(s) && reference.edges(s).any(|(_, v)| v);
+        let m29 = r.summary.first(&Key::Function('M', 29)).is_some();
+        let rises = |s: Signal| self.declares(s) && r.summary.first(&Key::Edge(s, true)).is_some();
         if m29 && self.functions {
             return Anchor::Function('M', 29);
         }
@@ -130,7 +129,7 @@ impl Carried {
         if self.rpm && r.spindle_turns {
             return Anchor::SpindleStart;
         }
-        if reference.meta.axes.iter().any(|a| self.axis(a.index) && r.moves[a.index]) {
+        if r.trace.meta.axes.iter().any(|a| self.axis(a.index) && r.moves[a.index]) {
             return Anchor::TapMotion;
         }
         Anchor::Offset(0)
@@ -153,12 +152,13 @@ fn note(what: String, count: usize, reason: String) -> NotComparable {
     NotComparable { what, count, reason }
 }
 
-/// The names of `keys` in order of first appearance, joined.
-fn names(keys: impl Iterator<Item = Key>) -> (String, usize) {
+/// The names of the reference's keys that `pick` takes, in order of first appearance, joined,
+/// and how many events they are.
+fn names(r: &Reference, pick: impl Fn(&Key) -> bool) -> (String, usize) {
     let mut seen: Vec<String> = Vec::new();
     let mut n = 0;
-    for k in keys {
-        n += 1;
+    for (k, _, count) in r.summary.keys.iter().filter(|x| pick(&x.0)) {
+        n += count;
         let d = k.describe();
         if !seen.contains(&d) {
             seen.push(d);
@@ -170,18 +170,17 @@ fn names(keys: impl Iterator<Item = Key>) -> (String, usize) {
 /// What the recording cannot carry, known before it is read: functions, alarms, the envelope of
 /// axes it does not record, the synchronisation error without a spindle angle, the final speed
 /// without a spindle speed.
-pub(super) fn left_out(r: &Reference, skeleton: &nc_engine::trace::Trace, c: &Carried) -> Vec<NotComparable> {
+pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
     let src = &c.source;
     let mut out = Vec::new();
-    let keys = || skeleton.events.iter().filter_map(|e| Key::of(&e.event));
     if !c.functions {
-        let (what, n) = names(keys().filter(|k| matches!(k, Key::Function(..))));
+        let (what, n) = names(r, |k| matches!(k, Key::Function(..)));
         if n > 0 {
             out.push(note(what, n, format!("{src} carries no M/S/T functions")));
         }
     }
     if !c.alarms {
-        let (what, n) = names(keys().filter(|k| matches!(k, Key::Alarm(_))));
+        let (what, n) = names(r, |k| matches!(k, Key::Alarm(_)));
         if n > 0 {
             out.push(note(what, n, format!("{src} carries no alarms")));
         }

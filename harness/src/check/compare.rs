@@ -65,6 +65,8 @@ pub struct Comparator<'r, 'a> {
     offset: Option<i64>,
     pending: Vec<TraceEvent>,
     matcher: Option<Matcher>,
+    /// The widest event window, µs.
+    wmax: i64,
     matched: usize,
     keys: KeyTracker,
     findings: Vec<Finding>,
@@ -140,6 +142,8 @@ pub struct Comparator<'r, 'a> {
     last_sample_t: Option<i64>,
     motion: Option<MotionDetector>,
     marks: Vec<(i64, i64)>,
+    /// The most reference events waiting in the matcher at once.
+    pub peak_waiting: usize,
     handshake: super::handshake::Handshake,
     ref_handshake: Vec<super::handshake::Fault>,
 }
@@ -170,7 +174,8 @@ impl<'r, 'a> Comparator<'r, 'a> {
         let ref_anchor = match &anchor {
             Anchor::Offset(_) => None,
             Anchor::TapMotion | Anchor::SpindleStart => watch.and_then(|(w, th)| r.first_change(w, th)),
-            a => skeleton.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
+            Anchor::Function(l, c) => r.summary.first(&Key::Function(*l, *c)),
+            Anchor::Edge(s, v) => r.summary.first(&Key::Edge(*s, *v)),
         };
         let offset = match anchor {
             Anchor::Offset(o) => Some(o),
@@ -189,7 +194,8 @@ impl<'r, 'a> Comparator<'r, 'a> {
             anchor,
             offset,
             pending: Vec::new(),
-            matcher: Some(Matcher::new(skeleton)),
+            matcher: Some(if r.streamed { Matcher::streaming(true, true) } else { Matcher::new(skeleton) }),
+            wmax: 0,
             matched: 0,
             keys: KeyTracker::new(r.tap),
             findings: Vec::new(),
@@ -236,22 +242,54 @@ impl<'r, 'a> Comparator<'r, 'a> {
             last_sample_t: None,
             motion,
             marks: Vec::new(),
+            peak_waiting: 0,
             handshake: Default::default(),
-            ref_handshake: super::handshake::faults_of(skeleton),
+            ref_handshake: r.summary.faults.clone(),
+        }
+        .widest_window()
+    }
+
+    /// The widest event window, for the reference's discrete events taken from its feed.
+    fn widest_window(mut self) -> Self {
+        let w = self.tol.event_windows_ms.values().fold(self.tol.event_ms, |a, &b| a.max(b));
+        self.wmax = ms_us(w).max(0);
+        self
+    }
+
+    /// The reference's discrete events pulled with its samples, given to the matcher (up to
+    /// `t` + the widest window at least, when `t` is given: a recorded event at `t` is matched
+    /// as against all of them).
+    fn take_reference_events(&mut self, t: Option<i64>) {
+        if !self.r.streamed {
+            return;
+        }
+        let mut w = self.r.win.borrow_mut();
+        if let Some(t) = t {
+            w.ensure(t.saturating_add(self.wmax));
+        }
+        if w.keyed.is_empty() {
+            return;
+        }
+        if let Some(m) = &mut self.matcher {
+            for (tr, k) in w.keyed.drain(..) {
+                m.reference(k, tr);
+            }
+        } else {
+            w.keyed.clear();
         }
     }
 
     /// Compares only what `carried` says the recording can show; the reference events it
     /// cannot (functions, alarms) are counted as not comparable.
     pub fn carrying(mut self, carried: Carried, skeleton: &Trace) -> Self {
-        let keep = |k: &Key| match k {
-            Key::Function(..) => carried.functions,
-            Key::Alarm(_) => carried.alarms,
-            Key::Edge(..) => true,
-        };
+        let (f, a) = (carried.functions, carried.alarms);
         self.matcher = None; // one matcher in memory at a time
-        self.matcher = Some(Matcher::new_filtered(skeleton, keep));
-        self.not_comparable = super::carried::left_out(self.r, skeleton, &carried);
+        self.matcher = Some(if self.r.streamed {
+            Matcher::streaming(f, a)
+        } else {
+            Matcher::new_filtered(skeleton, f, a)
+        });
+        self.not_comparable = super::carried::left_out(self.r, &carried);
         self.env_slots = self.r.axes().iter().map(|a| a.index).filter(|&k| carried.axis(k)).collect();
         self.carried = carried;
         self
@@ -387,6 +425,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             Event::Sample(s) => {
                 self.samples_seen += 1;
                 self.r.forget_before(t - self.floor_us);
+                self.take_reference_events(None);
                 if t >= 0 && t <= self.r.end_us {
                     if let Some(p) = self.last_sample_t {
                         self.max_gap_us = self.max_gap_us.max(t - p);
@@ -493,6 +532,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
     fn discrete(&mut self, t: i64, ev: &TraceEvent) {
         self.keep(t, ev);
         let Some(key) = Key::of(&ev.event) else { return };
+        self.take_reference_events(Some(t));
         if let Some(m) = &mut self.matcher {
             m.record(key, t, &self.tol, &mut self.findings);
         }
@@ -599,8 +639,16 @@ impl<'r, 'a> Comparator<'r, 'a> {
         for k in 0..self.env_runs.len() {
             self.close_env(k);
         }
+        if self.r.streamed {
+            // The rest of the reference's events; its samples only as far as the end's check
+            // looks (the final speed, ± the event window around the last recorded sample).
+            let last = self.last_sample.map_or(i64::MIN, |x| x.0);
+            self.r.win.borrow_mut().drain(last.saturating_add(ms_us(self.tol.event_ms)));
+            self.take_reference_events(None);
+        }
         if let Some(m) = self.matcher.take() {
             self.matched = m.matched;
+            self.peak_waiting = m.peak_waiting;
             self.marks = m.marks();
             m.finish(&mut self.findings);
         }

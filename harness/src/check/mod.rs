@@ -254,8 +254,9 @@ pub fn check_surveyed(
         }
         Source::Run(run) => std::thread::scope(|sc| {
             let (tx, rx) = std::sync::mpsc::sync_channel(4);
+            let keyed = skeleton.is_lean();
             sc.spawn(move || {
-                let mut sink = window::ChannelSink::new(tx);
+                let mut sink = window::ChannelSink::new(tx, keyed);
                 run(&mut sink as &mut dyn TraceSink);
                 sink.flush();
             });
@@ -277,10 +278,11 @@ fn compare(
 ) -> Report {
     let started = std::time::Instant::now();
     let anchor = spec.anchor.clone().unwrap_or_else(|| spec.carried.default_anchor(&r));
-    let totals = compare_totals(&r.trace);
-    // Without temporal rules the reference's discrete events are read once, here, then dropped.
+    let totals = r.summary.total;
+    // Without temporal rules the reference's discrete events are read once, here, then dropped
+    // (when the first pass kept them: else they come with the samples).
     let keep_all = spec.expect.is_some();
-    let full = if keep_all { None } else { Some(r.slim()) };
+    let full = if keep_all || r.streamed { None } else { Some(r.slim()) };
     let skeleton = full.as_ref().unwrap_or(&r.trace);
     let mut c =
         compare::Comparator::new(&r, skeleton, spec.tolerances.clone(), anchor.clone(), spec.rules.clone())
@@ -350,8 +352,4 @@ fn compare(
     };
     drop(c);
     Report { reference: std::mem::replace(&mut r.trace, report.reference.clone()), ..report }
-}
-
-fn compare_totals(reference: &Trace) -> usize {
-    reference.events.iter().filter(|e| events::Key::of(&e.event).is_some()).count()
 }

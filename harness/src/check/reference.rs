@@ -56,8 +56,13 @@ pub struct Reference<'a> {
     pub spindle_turns: bool,
     /// Each axis moves at some sample.
     pub moves: [bool; AXES],
-    /// [`Reference::slim`] dropped the discrete events.
+    /// [`Reference::slim`] dropped the discrete events (or the first pass kept none).
     pub slimmed: bool,
+    /// The first pass kept no discrete events: the comparison takes them from the samples'
+    /// feed ([`Window::keyed`]) as it advances.
+    pub streamed: bool,
+    /// What the comparison needs of the discrete events as a whole.
+    pub summary: super::events::Summary,
     /// The envelope's sliding extremes.
     extremes: RefCell<Extremes>,
     /// The index in `sync` of the last [`Reference::sync_index`] (where the next one looks
@@ -294,6 +299,7 @@ impl<'a> Reference<'a> {
     pub(crate) fn build(source: Source<'a>, feed: Feed<'a>) -> Reference<'a> {
         let mut sk = Skeleton::default();
         source.replay(&mut sk);
+        sk.summary.finish();
         Reference::build_from(source, sk, feed, true)
     }
 
@@ -340,7 +346,7 @@ impl<'a> Reference<'a> {
         Reference {
             trace,
             source,
-            win: RefCell::new(Window::new(feed)),
+            win: RefCell::new(Window::with_keyed(feed, sk.is_lean())),
             tap,
             keys,
             end_us: sk.end_us,
@@ -351,7 +357,9 @@ impl<'a> Reference<'a> {
             last_sample_t: sk.last_sample_t,
             spindle_turns: sk.spindle_turns,
             moves: sk.moves,
-            slimmed: false,
+            slimmed: sk.is_lean(),
+            streamed: sk.is_lean(),
+            summary: std::mem::take(&mut sk.summary),
             extremes: RefCell::new(Extremes::default()),
             sync_hint: std::cell::Cell::new(0),
         }

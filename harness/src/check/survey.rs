@@ -45,8 +45,10 @@ impl Source<'_> {
 pub struct Skeleton {
     /// The header.
     pub meta: Option<TraceMeta>,
-    /// Every event but the samples.
+    /// Every event but the samples (lean: the end only).
     pub events: Vec<TraceEvent>,
+    /// What the comparison needs of the discrete events as a whole (complete at the end).
+    pub summary: super::events::Summary,
     /// Every event, samples included.
     pub total: usize,
     /// The time of the last event.
@@ -61,8 +63,10 @@ pub struct Skeleton {
     pub phases: Vec<(i64, Phase)>,
     /// The inputs by time (name, value).
     pub inputs: Vec<(i64, String, String)>,
-    /// Phases, blocks and inputs are not kept in `events` (only the scenario's temporal rules
-    /// need them there; the phases and inputs are in their own lists, the blocks were planned).
+    /// Only the end is kept in `events` (only the scenario's temporal rules need the phases,
+    /// blocks and inputs there, which are in their own lists or planned; the edges, functions and
+    /// alarms are summed up in `summary` and given to the comparison again by the replay
+    /// alongside).
     lean: bool,
     planner: Option<super::sync::Planner>,
     first: Option<Sample>,
@@ -104,6 +108,7 @@ impl TraceSink for Skeleton {
                 }
             }
             e => {
+                self.summary.event(ev.t_us as i64, e);
                 match e {
                     Event::Signal { signal, value } => self.tap.signal(*signal, *value),
                     Event::Phase(p) => self.phases.push((ev.t_us as i64, *p)),
@@ -124,7 +129,7 @@ impl TraceSink for Skeleton {
                         e.clear();
                     }
                 }
-                if !(self.lean && matches!(e, Event::Phase(_) | Event::Block { .. } | Event::Input { .. })) {
+                if !self.lean || matches!(e, Event::End(_)) {
                     self.events.push(ev.clone());
                 }
             }
@@ -135,20 +140,19 @@ impl TraceSink for Skeleton {
 impl Skeleton {
     /// The first pass over `source`.
     pub fn of(source: Source) -> Skeleton {
-        let mut sk = Skeleton { fused: Some(Box::default()), ..Skeleton::default() };
-        source.replay(&mut sk);
-        sk
+        Skeleton::of_lean(source, false)
     }
 
-    /// [`Skeleton::of`], without keeping the phases, blocks and inputs among [`Skeleton::events`]
-    /// when `lean` (a comparison without temporal rules: memory, about half the events).
+    /// [`Skeleton::of`], keeping only the end among [`Skeleton::events`] when `lean` (a
+    /// comparison without temporal rules: memory does not follow the number of events).
     pub fn of_lean(source: Source, lean: bool) -> Skeleton {
         let mut sk = Skeleton { lean, fused: Some(Box::default()), ..Skeleton::default() };
         source.replay(&mut sk);
+        sk.summary.finish();
         sk
     }
 
-    /// Whether phases, blocks and inputs were left out of [`Skeleton::events`].
+    /// Whether only the end was kept in [`Skeleton::events`].
     pub fn is_lean(&self) -> bool {
         self.lean
     }

@@ -7,6 +7,7 @@ use std::sync::mpsc::{Receiver, SyncSender};
 
 use nc_engine::trace::{Event, Sample, TraceEvent, TraceMeta, TraceSink};
 
+use super::events::Key;
 use super::reference::unwrap_delta;
 
 /// Samples sent at once by a [`ChannelSink`].
@@ -17,9 +18,19 @@ pub(crate) enum Feed<'a> {
     /// The events of a trace in memory.
     Trace(std::slice::Iter<'a, TraceEvent>),
     /// Batches of samples from a reference run on another thread ([`ChannelSink`]).
-    Channel(Receiver<Vec<(i64, Sample)>>),
+    Channel(Receiver<Batch>),
     /// Nothing more.
     Done,
+}
+
+/// What a [`ChannelSink`] sends at once: samples, and the discrete events among them (edges,
+/// functions, alarms) when asked for.
+#[derive(Default)]
+pub struct Batch {
+    /// Samples: time, sample.
+    pub samples: Vec<(i64, Sample)>,
+    /// Discrete events: time, key.
+    pub keyed: Vec<(i64, Key)>,
 }
 
 /// A window of the reference's samples, in time order.
@@ -42,11 +53,18 @@ pub struct Window<'a> {
     last: Option<(i64, Sample, f64)>,
     /// Most samples held at once (a figure for the memory bound).
     pub peak: usize,
+    /// The reference's discrete events pulled with the samples and not yet taken (when
+    /// `keyed_wanted`): every one before the last sample held has been pulled.
+    pub keyed: Vec<(i64, Key)>,
+    keyed_wanted: bool,
+    /// Samples after this time are not kept (all but the first: [`Window::drain`]).
+    keep_until: i64,
 }
 
 impl<'a> Window<'a> {
-    /// A window fed by `feed`.
-    pub(crate) fn new(feed: Feed<'a>) -> Window<'a> {
+    /// A window fed by `feed`, that collects the discrete events in [`Window::keyed`] when
+    /// `keyed` (for a trace in memory; a [`ChannelSink`] sends them when made to).
+    pub(crate) fn with_keyed(feed: Feed<'a>, keyed: bool) -> Window<'a> {
         Window {
             t: Vec::new(),
             s: Vec::new(),
@@ -57,10 +75,16 @@ impl<'a> Window<'a> {
             feed,
             last: None,
             peak: 0,
+            keyed: Vec::new(),
+            keyed_wanted: keyed,
+            keep_until: i64::MAX,
         }
     }
 
     fn push(&mut self, t: i64, s: Sample) {
+        if self.last.is_some_and(|l| l.0 > self.keep_until) {
+            return;
+        }
         let acc = match self.last {
             None => s.spindle_mdeg as f64,
             Some((tp, p, acc)) => {
@@ -84,15 +108,21 @@ impl<'a> Window<'a> {
                         self.push(t, s);
                         return true;
                     }
+                    if self.keyed_wanted {
+                        if let Some(k) = Key::of(&e.event) {
+                            self.keyed.push((e.t_us as i64, k));
+                        }
+                    }
                 }
                 self.feed = Feed::Done;
                 false
             }
             Feed::Channel(rx) => match rx.recv() {
                 Ok(batch) => {
-                    for (t, s) in batch {
+                    for (t, s) in batch.samples {
                         self.push(t, s);
                     }
+                    self.keyed.extend(batch.keyed);
                     true
                 }
                 Err(_) => {
@@ -111,6 +141,13 @@ impl<'a> Window<'a> {
                 break;
             }
         }
+    }
+
+    /// Pulls the rest of the run, keeping its samples up to `keep_until` and the first after
+    /// it (the discrete events all go to [`Window::keyed`]): what comes later is not looked up.
+    pub fn drain(&mut self, keep_until: i64) {
+        self.keep_until = keep_until;
+        while self.pull() {}
     }
 
     /// Drops the samples before the last one at or before `floor` (nothing at or after `floor`
@@ -161,23 +198,29 @@ impl<'a> Window<'a> {
     }
 }
 
-/// A sink that sends the samples of a run, in batches, to a [`Window`] on another thread; it
-/// asks the run to stop once the window is gone.
+/// A sink that sends the samples of a run (and its discrete events when asked), in batches, to
+/// a [`Window`] on another thread; it asks the run to stop once the window is gone.
 pub struct ChannelSink {
-    tx: SyncSender<Vec<(i64, Sample)>>,
-    buf: Vec<(i64, Sample)>,
+    tx: SyncSender<Batch>,
+    buf: Batch,
+    keyed: bool,
     gone: bool,
 }
 
 impl ChannelSink {
-    /// A sink sending into `tx`.
-    pub fn new(tx: SyncSender<Vec<(i64, Sample)>>) -> ChannelSink {
-        ChannelSink { tx, buf: Vec::with_capacity(BATCH), gone: false }
+    /// A sink sending into `tx`, the discrete events too when `keyed`.
+    pub fn new(tx: SyncSender<Batch>, keyed: bool) -> ChannelSink {
+        ChannelSink { tx, buf: ChannelSink::batch(), keyed, gone: false }
+    }
+
+    fn batch() -> Batch {
+        Batch { samples: Vec::with_capacity(BATCH), keyed: Vec::new() }
     }
 
     /// Sends what is left.
     pub fn flush(&mut self) {
-        if !self.buf.is_empty() && !self.gone {
+        let empty = self.buf.samples.is_empty() && self.buf.keyed.is_empty();
+        if !empty && !self.gone {
             let b = std::mem::take(&mut self.buf);
             self.gone = self.tx.send(b).is_err();
         }
@@ -188,10 +231,14 @@ impl TraceSink for ChannelSink {
     fn start(&mut self, _meta: &TraceMeta) {}
     fn event(&mut self, ev: &TraceEvent) {
         if let Event::Sample(s) = &ev.event {
-            self.buf.push((ev.t_us as i64, *s));
-            if self.buf.len() >= BATCH {
+            self.buf.samples.push((ev.t_us as i64, *s));
+            if self.buf.samples.len() >= BATCH {
                 self.flush();
-                self.buf = Vec::with_capacity(BATCH);
+                self.buf = ChannelSink::batch();
+            }
+        } else if self.keyed {
+            if let Some(k) = Key::of(&ev.event) {
+                self.buf.keyed.push((ev.t_us as i64, k));
             }
         }
     }
