@@ -295,7 +295,7 @@ pub(super) fn key_points_comparable(c: &mut Comparator) -> bool {
         return false;
     };
     let src = c.carried.source.clone();
-    let n = c.r.keys.segments.len() + c.r.keys.returns.len();
+    let n = c.key_counts().0 + c.key_counts().1;
     if !c.carried.axis(tap.slot) {
         let l = c.r.axes().iter().find(|a| a.index == tap.slot).map_or('?', |a| a.letter);
         c.not_comparable.push(note(what.into(), n, format!("{src} records no {l} position (the tap axis)")));
@@ -309,8 +309,8 @@ pub(super) fn key_points_comparable(c: &mut Comparator) -> bool {
         ));
         return false;
     }
-    if !c.carries_signal(Signal::Rtap) && !c.r.keys.returns.is_empty() {
-        let n = c.r.keys.returns.len();
+    if !c.carries_signal(Signal::Rtap) && c.key_counts().1 > 0 {
+        let n = c.key_counts().1;
         c.not_comparable.push(note(
             "return level and spindle reversals".into(),
             n,

@@ -8,7 +8,8 @@ use nc_engine::trace::{EndSummary, Event, Sample, Signal, Signals, Trace, TraceE
 
 use super::carried::{Carried, NotComparable};
 use super::events::{Finding, Key, Matcher};
-use super::keypoints::KeyTracker;
+use super::keypoints::{KeyPoints, KeyTracker};
+use super::keypoints_cmp::KeyCompare;
 use super::reference::{MotionDetector, Reference, Watch};
 use super::tolerance::{attribute, mm_nm, ms_us, Anchor, Context, Tolerances, Topic};
 use super::{Divergence, Point, MAX_DIVERGENCES};
@@ -69,6 +70,8 @@ pub struct Comparator<'r, 'a> {
     wmax: i64,
     matched: usize,
     keys: KeyTracker,
+    /// Both traces' key points compared stroke by stroke.
+    keycmp: KeyCompare,
     findings: Vec<Finding>,
     sig: Signals,
     /// The synchronised move of the reference being compared (index) and the error at its
@@ -198,6 +201,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             wmax: 0,
             matched: 0,
             keys: KeyTracker::new(r.tap),
+            keycmp: KeyCompare::default(),
             findings: Vec::new(),
             sig: Signals::default(),
             sync_win: None,
@@ -247,6 +251,34 @@ impl<'r, 'a> Comparator<'r, 'a> {
             ref_handshake: r.summary.faults.clone(),
         }
         .widest_window()
+        .reference_keys()
+    }
+
+    /// The reference's key points, when they are not read alongside (streamed).
+    fn reference_keys(mut self) -> Self {
+        if !self.r.streamed {
+            let mut keys = self.r.keys.clone();
+            self.keycmp.ref_reversals = keys.reversals;
+            self.add_keys(0, &mut keys);
+        }
+        self
+    }
+
+    /// Key points of the reference (`side` 0) or the recording (1) for the stroke by stroke
+    /// comparison.
+    fn add_keys(&mut self, side: usize, keys: &mut KeyPoints) {
+        let mut kc = std::mem::take(&mut self.keycmp);
+        kc.add(self, side, keys);
+        self.keycmp = kc;
+    }
+
+    /// The recording's key points read so far that will not change, compared.
+    fn take_recorded_keys(&mut self) {
+        if self.keys.has_final() {
+            let mut keys = KeyPoints::default();
+            self.keys.take(&mut keys);
+            self.add_keys(1, &mut keys);
+        }
     }
 
     /// The widest event window, for the reference's discrete events taken from its feed.
@@ -266,6 +298,12 @@ impl<'r, 'a> Comparator<'r, 'a> {
         let mut w = self.r.win.borrow_mut();
         if let Some(t) = t {
             w.ensure(t.saturating_add(self.wmax));
+        }
+        if !(w.keys.segments.is_empty() && w.keys.returns.is_empty()) {
+            let mut keys = std::mem::take(&mut w.keys);
+            drop(w);
+            self.add_keys(0, &mut keys);
+            w = self.r.win.borrow_mut();
         }
         if w.keyed.is_empty() {
             return;
@@ -333,6 +371,19 @@ impl<'r, 'a> Comparator<'r, 'a> {
             self.omitted += 1;
             *self.omitted_by_check.entry(d.check).or_insert(0) += 1;
         }
+    }
+
+    /// The reference's key points: segments and returns.
+    pub(super) fn key_counts(&self) -> (usize, usize) {
+        (self.keycmp.segments(0), self.keycmp.returns(0))
+    }
+
+    /// Counts a divergence of `check` left out as [`Comparator::push`] leaves one out past
+    /// [`super::MAX_PER_CHECK`].
+    pub(super) fn omit(&mut self, check: &str) {
+        *self.per_check.entry(check.to_string()).or_insert(0) += 1;
+        self.omitted += 1;
+        *self.omitted_by_check.entry(check.to_string()).or_insert(0) += 1;
     }
 
     /// Adds a divergence attributed to the rule that `topic` breaks at reference time `t`.
@@ -461,6 +512,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
                 self.handshake.edge(t, *signal, *value, &mut faults);
                 super::handshake::report(self, faults);
                 self.keys.event(t, &ev.event);
+                self.take_recorded_keys();
                 self.discrete(t, ev);
             }
             Event::Function { .. } => {
@@ -623,8 +675,9 @@ impl<'r, 'a> Comparator<'r, 'a> {
     }
 
     /// Ends the stream: open runs are closed, unmatched reference events reported, key points
-    /// and the final state compared. Returns the compact recorded trace.
-    pub fn finish(&mut self) -> (Trace, super::keypoints::KeyPoints) {
+    /// and the final state compared. Returns the compact recorded trace and the pecks of the
+    /// reference and of the recording.
+    pub fn finish(&mut self) -> (Trace, (usize, usize)) {
         if self.offset.is_none() {
             self.give_up_anchor();
             for p in std::mem::take(&mut self.pending) {
@@ -655,14 +708,19 @@ impl<'r, 'a> Comparator<'r, 'a> {
         self.flush_findings();
         super::shift::resolve(self);
         super::carried::judge_missing_edges(self);
-        let keys = std::mem::replace(&mut self.keys, KeyTracker::new(None)).finish();
+        let mut keys = std::mem::replace(&mut self.keys, KeyTracker::new(None)).finish();
+        self.add_keys(1, &mut keys);
+        if self.r.streamed {
+            self.keycmp.ref_reversals = self.r.win.borrow().reversals.unwrap_or(0);
+        }
+        let pecks = self.keycmp.pecks();
         if super::carried::key_points_comparable(self) {
-            super::keypoints_cmp::compare(self, &keys);
+            std::mem::take(&mut self.keycmp).finish(self, keys.reversals);
         }
         if self.carried.rpm {
             self.end_state();
         }
-        (self.compact_trace(), keys)
+        (self.compact_trace(), pecks)
     }
 
     fn end_state(&mut self) {

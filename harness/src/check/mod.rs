@@ -254,11 +254,11 @@ pub fn check_surveyed(
         }
         Source::Run(run) => std::thread::scope(|sc| {
             let (tx, rx) = std::sync::mpsc::sync_channel(4);
-            let keyed = skeleton.is_lean();
+            let (keyed, tap) = (skeleton.is_lean(), skeleton.tap());
             sc.spawn(move || {
-                let mut sink = window::ChannelSink::new(tx, keyed);
+                let mut sink = window::ChannelSink::new(tx, keyed, tap);
                 run(&mut sink as &mut dyn TraceSink);
-                sink.flush();
+                sink.finish();
             });
             let r = reference::Reference::build_from(
                 source,
@@ -292,7 +292,7 @@ fn compare(
     for ev in recorded {
         c.event(ev);
     }
-    let (compact, keys) = c.finish();
+    let (compact, pecks) = c.finish();
     let mut rules = Vec::new();
     if let Some(exp) = spec.expect {
         rules = expect::evaluate_discrete(exp, &compact);
@@ -330,7 +330,7 @@ fn compare(
         max_sync_error_mm: c.max_sync_nm / 1e6,
         sync_samples: c.sync_samples,
         max_envelope_excess_mm: c.max_env_nm / 1e6,
-        pecks: (r.keys.pecks().len(), keys.pecks().len()),
+        pecks,
         fit_rms_mm: (c.fit.1 > 0).then(|| (c.fit.0 / c.fit.1 as f64).sqrt() / 1e6),
         fit_values: c.fit.1,
     };

@@ -346,9 +346,10 @@ impl<'a> Reference<'a> {
         Reference {
             trace,
             source,
-            win: RefCell::new(Window::with_keyed(feed, sk.is_lean())),
+            win: RefCell::new(Window::with_keyed(feed, sk.is_lean(), tap)),
             tap,
-            keys,
+            // Streamed: read again alongside the comparison.
+            keys: if sk.is_lean() { KeyPoints::default() } else { keys },
             end_us: sk.end_us,
             phases,
             inputs,

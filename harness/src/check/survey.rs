@@ -146,7 +146,8 @@ impl Skeleton {
     /// [`Skeleton::of`], keeping only the end among [`Skeleton::events`] when `lean` (a
     /// comparison without temporal rules: memory does not follow the number of events).
     pub fn of_lean(source: Source, lean: bool) -> Skeleton {
-        let mut sk = Skeleton { lean, fused: Some(Box::default()), ..Skeleton::default() };
+        let fused = super::survey_fused::Fused::new(lean);
+        let mut sk = Skeleton { lean, fused: Some(Box::new(fused)), ..Skeleton::default() };
         source.replay(&mut sk);
         sk.summary.finish();
         sk
@@ -187,7 +188,8 @@ impl Skeleton {
     /// What the second pass ([`Survey`]) would give for `plan` (the key points and the plan's
     /// spans), read in this one; `None` when it could not be (the tap guessed from the first
     /// stroke was not the run's, the plan has lead blocks, or too many events came before the
-    /// first stroke): the second pass is then needed.
+    /// first stroke): the second pass is then needed. A lean pass reads no key points (the
+    /// comparison reads them alongside): none are given, and no tap is guessed.
     pub fn fused_survey(
         &mut self,
         tap: Option<Tap>,

@@ -37,6 +37,8 @@ pub(super) struct Fused {
     open: [Option<usize>; 2],
     active: Vec<(usize, Option<Sample>)>,
     prev: Option<(i64, Sample)>,
+    /// No key points read (the comparison reads them alongside): the spans only.
+    no_keys: bool,
 }
 
 fn axes(meta: &Option<TraceMeta>) -> &[nc_engine::trace::AxisSpec] {
@@ -44,6 +46,11 @@ fn axes(meta: &Option<TraceMeta>) -> &[nc_engine::trace::AxisSpec] {
 }
 
 impl Fused {
+    /// A second pass to read alongside the first, without the key points when `no_keys`.
+    pub(super) fn new(no_keys: bool) -> Fused {
+        Fused { no_keys, ..Fused::default() }
+    }
+
     /// A discrete event, after the first pass read it (`edges`: the spans it opened or closed).
     /// False: given up.
     pub(super) fn event(
@@ -87,6 +94,9 @@ impl Fused {
     }
 
     fn keys_event(&mut self, t: i64, ev: &Event, tap: &TapFinder, meta: &Option<TraceMeta>) -> bool {
+        if self.no_keys {
+            return true;
+        }
         if let Some(k) = &mut self.keys {
             k.event(t, ev);
             return true;
@@ -115,7 +125,7 @@ impl Fused {
         if !plan.lead.is_empty() {
             return None;
         }
-        if self.keys.is_none() {
+        if self.keys.is_none() && !self.no_keys {
             self.start_keys(tap);
         }
         let same = |a: &Option<Tap>, b: &Option<Tap>| match (a, b) {
@@ -123,7 +133,7 @@ impl Fused {
             (Some(a), Some(b)) => (a.slot, a.into_sign, a.in_signal) == (b.slot, b.into_sign, b.in_signal),
             _ => false,
         };
-        if !same(&self.guess?, &tap) {
+        if !self.no_keys && !same(&self.guess?, &tap) {
             return None;
         }
         // Spans still open end with the run (after every sample: their end is never passed).
@@ -153,7 +163,8 @@ impl Fused {
         } else {
             self.closed.iter().map(|&i| std::mem::take(&mut self.out[i])).collect()
         };
-        Some((self.keys?.finish(), spans))
+        let keys = if self.no_keys { KeyPoints::default() } else { self.keys?.finish() };
+        Some((keys, spans))
     }
 }
 
@@ -168,16 +179,21 @@ mod tests {
         let m = Machine::new(dialect).unwrap();
         let p = m.parse(text).unwrap();
         let run = |sink: &mut dyn nc_engine::trace::TraceSink| m.run(&p, &RunOptions::default(), sink);
-        let mut sk = Skeleton::of_lean(Source::Run(&run), true);
+        let mut sk = Skeleton::of(Source::Run(&run));
         let tap = sk.tap();
         let plan = sk.plan();
         let axes = sk.meta.as_ref().unwrap().axes.clone();
+        // A lean pass reads the spans without the key points (and needs no guess of the tap).
+        let mut lean = Skeleton::of_lean(Source::Run(&run), true);
+        let (lean_tap, lean_plan) = (lean.tap(), lean.plan());
+        let lean_spans = lean.fused_survey(lean_tap, &lean_plan).map(|f| format!("{:?}", f.1));
         let fused = sk.fused_survey(tap, &plan)?;
         let mut sv = Survey::new(tap, plan.spans.clone(), plan.lead.clone(), &axes);
         Source::Run(&run).replay(&mut sv);
         let (keys, spans, _) = sv.finish();
         assert_eq!(fused.0, keys, "{dialect}: key points");
         assert_eq!(format!("{:?}", fused.1), format!("{spans:?}"), "{dialect}: spans");
+        assert_eq!(lean_spans, Some(format!("{spans:?}")), "{dialect}: spans of a lean pass");
         Some(!spans.is_empty() && !keys.segments.is_empty())
     }
 

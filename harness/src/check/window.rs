@@ -8,7 +8,8 @@ use std::sync::mpsc::{Receiver, SyncSender};
 use nc_engine::trace::{Event, Sample, TraceEvent, TraceMeta, TraceSink};
 
 use super::events::Key;
-use super::reference::unwrap_delta;
+use super::keypoints::{KeyPoints, KeyTracker};
+use super::reference::{unwrap_delta, Tap};
 
 /// Samples sent at once by a [`ChannelSink`].
 const BATCH: usize = 2048;
@@ -31,6 +32,10 @@ pub struct Batch {
     pub samples: Vec<(i64, Sample)>,
     /// Discrete events: time, key.
     pub keyed: Vec<(i64, Key)>,
+    /// The reference's key points read so far that will not change (its reversals: at the end).
+    pub keys: KeyPoints,
+    /// The end of the run: its spindle reversals in rigid tapping (the key points' count).
+    pub reversals: Option<u32>,
 }
 
 /// A window of the reference's samples, in time order.
@@ -57,14 +62,23 @@ pub struct Window<'a> {
     /// `keyed_wanted`): every one before the last sample held has been pulled.
     pub keyed: Vec<(i64, Key)>,
     keyed_wanted: bool,
+    /// The reference's key points pulled with the samples and not yet taken (when
+    /// `keyed_wanted`), and its reversals once its end is pulled.
+    pub keys: KeyPoints,
+    /// The reference's spindle reversals in rigid tapping, once its end is pulled.
+    pub reversals: Option<u32>,
+    /// Reads the key points of a trace in memory.
+    tracker: Option<KeyTracker>,
     /// Samples after this time are not kept (all but the first: [`Window::drain`]).
     keep_until: i64,
 }
 
 impl<'a> Window<'a> {
-    /// A window fed by `feed`, that collects the discrete events in [`Window::keyed`] when
-    /// `keyed` (for a trace in memory; a [`ChannelSink`] sends them when made to).
-    pub(crate) fn with_keyed(feed: Feed<'a>, keyed: bool) -> Window<'a> {
+    /// A window fed by `feed`, that collects the discrete events in [`Window::keyed`] and the
+    /// key points (for the reference's tap `tap`) in [`Window::keys`] when `keyed` (read here
+    /// from a trace in memory; a [`ChannelSink`] sends them when made to).
+    pub(crate) fn with_keyed(feed: Feed<'a>, keyed: bool, tap: Option<Tap>) -> Window<'a> {
+        let tracker = (keyed && matches!(feed, Feed::Trace(_))).then(|| KeyTracker::new(tap));
         Window {
             t: Vec::new(),
             s: Vec::new(),
@@ -77,6 +91,9 @@ impl<'a> Window<'a> {
             peak: 0,
             keyed: Vec::new(),
             keyed_wanted: keyed,
+            keys: KeyPoints::default(),
+            reversals: None,
+            tracker,
             keep_until: i64::MAX,
         }
     }
@@ -103,6 +120,12 @@ impl<'a> Window<'a> {
         match &mut self.feed {
             Feed::Trace(it) => {
                 for e in it.by_ref() {
+                    if let Some(k) = &mut self.tracker {
+                        k.event(e.t_us as i64, &e.event);
+                        if k.has_final() {
+                            k.take(&mut self.keys);
+                        }
+                    }
                     if let Event::Sample(s) = &e.event {
                         let (t, s) = (e.t_us as i64, *s);
                         self.push(t, s);
@@ -114,6 +137,12 @@ impl<'a> Window<'a> {
                         }
                     }
                 }
+                if let Some(k) = self.tracker.take() {
+                    let mut rest = k.finish();
+                    self.keys.segments.append(&mut rest.segments);
+                    self.keys.returns.append(&mut rest.returns);
+                    self.reversals = Some(rest.reversals);
+                }
                 self.feed = Feed::Done;
                 false
             }
@@ -123,6 +152,12 @@ impl<'a> Window<'a> {
                         self.push(t, s);
                     }
                     self.keyed.extend(batch.keyed);
+                    let mut keys = batch.keys;
+                    self.keys.segments.append(&mut keys.segments);
+                    self.keys.returns.append(&mut keys.returns);
+                    if batch.reversals.is_some() {
+                        self.reversals = batch.reversals;
+                    }
                     true
                 }
                 Err(_) => {
@@ -204,22 +239,44 @@ pub struct ChannelSink {
     tx: SyncSender<Batch>,
     buf: Batch,
     keyed: bool,
+    /// Reads the key points (when `keyed`).
+    tracker: Option<KeyTracker>,
     gone: bool,
 }
 
 impl ChannelSink {
-    /// A sink sending into `tx`, the discrete events too when `keyed`.
-    pub fn new(tx: SyncSender<Batch>, keyed: bool) -> ChannelSink {
-        ChannelSink { tx, buf: ChannelSink::batch(), keyed, gone: false }
+    /// A sink sending into `tx`, the discrete events and the key points (for the reference's
+    /// tap `tap`) too when `keyed`.
+    pub fn new(tx: SyncSender<Batch>, keyed: bool, tap: Option<Tap>) -> ChannelSink {
+        let tracker = keyed.then(|| KeyTracker::new(tap));
+        ChannelSink { tx, buf: ChannelSink::batch(), keyed, tracker, gone: false }
     }
 
     fn batch() -> Batch {
-        Batch { samples: Vec::with_capacity(BATCH), keyed: Vec::new() }
+        Batch { samples: Vec::with_capacity(BATCH), ..Batch::default() }
     }
 
-    /// Sends what is left.
+    /// Sends what is left, the end of the run.
+    pub fn finish(&mut self) {
+        if let Some(k) = self.tracker.take() {
+            let mut rest = k.finish();
+            self.buf.keys.segments.append(&mut rest.segments);
+            self.buf.keys.returns.append(&mut rest.returns);
+            self.buf.reversals = Some(rest.reversals);
+        }
+        self.flush();
+    }
+
+    /// Sends what is read.
     pub fn flush(&mut self) {
-        let empty = self.buf.samples.is_empty() && self.buf.keyed.is_empty();
+        if let Some(k) = &mut self.tracker {
+            k.take(&mut self.buf.keys);
+        }
+        let empty = self.buf.samples.is_empty()
+            && self.buf.keyed.is_empty()
+            && self.buf.keys.segments.is_empty()
+            && self.buf.keys.returns.is_empty()
+            && self.buf.reversals.is_none();
         if !empty && !self.gone {
             let b = std::mem::take(&mut self.buf);
             self.gone = self.tx.send(b).is_err();
@@ -230,6 +287,9 @@ impl ChannelSink {
 impl TraceSink for ChannelSink {
     fn start(&mut self, _meta: &TraceMeta) {}
     fn event(&mut self, ev: &TraceEvent) {
+        if let Some(k) = &mut self.tracker {
+            k.event(ev.t_us as i64, &ev.event);
+        }
         if let Event::Sample(s) = &ev.event {
             self.buf.samples.push((ev.t_us as i64, *s));
             if self.buf.samples.len() >= BATCH {
