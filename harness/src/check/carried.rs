@@ -170,7 +170,7 @@ fn names(r: &Reference, pick: impl Fn(&Key) -> bool) -> (String, usize) {
 /// What the recording cannot carry, known before it is read: functions, alarms, the envelope of
 /// axes it does not record, the synchronisation error without a spindle angle, the final speed
 /// without a spindle speed.
-pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
+pub(super) fn left_out(r: &Reference, c: &Carried) -> (Vec<NotComparable>, Option<usize>) {
     let src = &c.source;
     let mut out = Vec::new();
     if !c.functions {
@@ -189,7 +189,29 @@ pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
         let l = a.letter;
         out.push(note(format!("{l} position envelope"), 0, format!("{src} records no {l} position")));
     }
-    if r.sync.is_empty() {
+    // Streamed, the synchronised moves are known at the end: their notes go here then.
+    let sync_at = r.streamed.then_some(out.len());
+    if !r.streamed {
+        let per_slot = |slot: usize| r.sync.iter().filter(|w| w.slot == slot).count();
+        out.extend(sync_notes(r, c, r.sync.len(), per_slot));
+    }
+    if !c.rpm {
+        out.push(note("final spindle speed".into(), 0, format!("{src} records no spindle speed")));
+    }
+    (out, sync_at)
+}
+
+/// The notes on the synchronisation error of a reference with `n` synchronised moves, `per_slot`
+/// of each axis, for a recording that cannot show it.
+pub(super) fn sync_notes(
+    r: &Reference,
+    c: &Carried,
+    n: usize,
+    per_slot: impl Fn(usize) -> usize,
+) -> Vec<NotComparable> {
+    let src = &c.source;
+    let mut out = Vec::new();
+    if n == 0 {
         out.push(note(
             "synchronisation error".into(),
             0,
@@ -197,7 +219,6 @@ pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
                 .into(),
         ));
     } else if !c.angle {
-        let n = r.sync.len();
         out.push(note(
             format!("synchronisation error ({n} synchronised moves)"),
             n,
@@ -205,7 +226,7 @@ pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
         ));
     } else {
         for a in r.axes().iter().filter(|a| !c.axis(a.index)) {
-            let n = r.sync.iter().filter(|w| w.slot == a.index).count();
+            let n = per_slot(a.index);
             if n > 0 {
                 let l = a.letter;
                 out.push(note(
@@ -215,9 +236,6 @@ pub(super) fn left_out(r: &Reference, c: &Carried) -> Vec<NotComparable> {
                 ));
             }
         }
-    }
-    if !c.rpm {
-        out.push(note("final spindle speed".into(), 0, format!("{src} records no spindle speed")));
     }
     out
 }
@@ -285,7 +303,7 @@ pub(super) fn judge_missing_edges(c: &mut Comparator) {
 pub(super) fn key_points_comparable(c: &mut Comparator) -> bool {
     let what = "key points (pecks, depths, retract heights, bottom, pauses, return level, reversals)";
     let Some(tap) = c.r.tap else {
-        if c.r.phases.iter().any(|p| p.1 == nc_engine::trace::Phase::Cutting) {
+        if c.r.cuts {
             c.not_comparable.push(note(
                 what.into(),
                 0,

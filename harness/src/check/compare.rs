@@ -72,6 +72,11 @@ pub struct Comparator<'r, 'a> {
     keys: KeyTracker,
     /// Both traces' key points compared stroke by stroke.
     keycmp: KeyCompare,
+    /// Divergences kept whose rule is found at the end (index, topic, time).
+    unattributed: Vec<(usize, Topic, i64)>,
+    /// Where the notes on the synchronisation error go among [`Comparator::not_comparable`],
+    /// once the reference's synchronised moves are all read (streamed).
+    sync_notes_at: Option<usize>,
     findings: Vec<Finding>,
     sig: Signals,
     /// The synchronised move of the reference being compared (index) and the error at its
@@ -202,6 +207,8 @@ impl<'r, 'a> Comparator<'r, 'a> {
             matched: 0,
             keys: KeyTracker::new(r.tap),
             keycmp: KeyCompare::default(),
+            unattributed: Vec::new(),
+            sync_notes_at: None,
             findings: Vec::new(),
             sig: Signals::default(),
             sync_win: None,
@@ -327,7 +334,9 @@ impl<'r, 'a> Comparator<'r, 'a> {
         } else {
             Matcher::new_filtered(skeleton, f, a)
         });
-        self.not_comparable = super::carried::left_out(self.r, &carried);
+        let (notes, at) = super::carried::left_out(self.r, &carried);
+        self.not_comparable = notes;
+        self.sync_notes_at = at;
         self.env_slots = self.r.axes().iter().map(|a| a.index).filter(|&k| carried.axis(k)).collect();
         self.carried = carried;
         self
@@ -356,20 +365,69 @@ impl<'r, 'a> Comparator<'r, 'a> {
             sync_rule: self
                 .r
                 .sync_index(t)
-                .and_then(|k| super::tolerance::sync_rule(&self.dialect, self.r.sync[k].code)),
+                .and_then(|k| super::tolerance::sync_rule(&self.dialect, self.r.sync_window(k).code)),
             in_sync: self.r.sync_index(t).is_some(),
         }
     }
 
-    /// Adds a divergence (the first [`MAX_DIVERGENCES`] are kept).
-    pub fn push(&mut self, d: Divergence) {
+    /// The attribution context at `t` from what a later replay found there (`Sweep`).
+    fn context_from(&self, t: i64, m: super::sync_stream::Moment) -> Context {
+        Context {
+            dialect: self.dialect.clone(),
+            inputs: self.r.inputs_at(t),
+            overload: self.r.overload_by(t + ms_us(self.tol.envelope_ms).max(ms_us(self.tol.event_ms))),
+            scenario_rules: self.rules.clone(),
+            phase: Some(m.0),
+            sync_rule: m.1.and_then(|code| super::tolerance::sync_rule(&self.dialect, code)),
+            in_sync: m.1.is_some(),
+        }
+    }
+
+    /// The rule that `topic` breaks at `t`, when what attribution needs there is still held.
+    pub(super) fn attribute_now(&self, topic: Topic, t: i64) -> Option<String> {
+        self.r.holds_context_at(t).then(|| attribute(topic, &self.context(t)))
+    }
+
+    /// Attributes the divergences found at times whose context was dropped: one more replay
+    /// of the reference reads its phases and synchronised moves there.
+    fn attribute_late(&mut self) {
+        if self.unattributed.is_empty() {
+            return;
+        }
+        let mut late = std::mem::take(&mut self.unattributed);
+        late.sort_by_key(|x| x.2);
+        let times = late.iter().map(|x| x.2).collect();
+        let moments = super::sync_stream::Sweep::new(self.r.tap, times).run(self.r.source);
+        for ((i, topic, t), m) in late.into_iter().zip(moments) {
+            let rule = attribute(topic, &self.context_from(t, m));
+            if let Some(d) = self.divergences.get_mut(i) {
+                d.rule = rule;
+            }
+        }
+    }
+
+    /// Adds a divergence (the first [`MAX_DIVERGENCES`] are kept); its index when kept.
+    pub fn push(&mut self, d: Divergence) -> Option<usize> {
         let n = self.per_check.entry(d.check.clone()).or_insert(0);
         *n += 1;
         if self.divergences.len() < MAX_DIVERGENCES && *n <= super::MAX_PER_CHECK {
             self.divergences.push(d);
+            Some(self.divergences.len() - 1)
         } else {
             self.omitted += 1;
             *self.omitted_by_check.entry(d.check).or_insert(0) += 1;
+            None
+        }
+    }
+
+    /// Adds a divergence whose rule is `rule`, or, when None, attributed at the end to `topic`
+    /// at its time ([`Comparator::attribute_now`]).
+    pub(super) fn push_attributed(&mut self, mut d: Divergence, rule: Option<String>, topic: Topic) {
+        let late = rule.is_none();
+        d.rule = rule.unwrap_or_default();
+        let t = d.t_us.unwrap_or(0);
+        if let (Some(i), true) = (self.push(d), late) {
+            self.unattributed.push((i, topic, t));
         }
     }
 
@@ -398,16 +456,17 @@ impl<'r, 'a> Comparator<'r, 'a> {
         a: String,
         m: String,
     ) {
-        let rule = attribute(topic, &self.context(t));
-        self.push(Divergence {
-            rule,
+        let rule = self.attribute_now(topic, t);
+        let d = Divergence {
+            rule: String::new(),
             check: check.into(),
             what,
             t_us: Some(t),
             expected: e,
             actual: a,
             margin: m,
-        });
+        };
+        self.push_attributed(d, rule, topic);
     }
 
     /// One recorded event, time as recorded.
@@ -713,6 +772,12 @@ impl<'r, 'a> Comparator<'r, 'a> {
         if self.r.streamed {
             self.keycmp.ref_reversals = self.r.win.borrow().reversals.unwrap_or(0);
         }
+        if let Some(at) = self.sync_notes_at.take() {
+            let count = self.r.win.borrow().moves_count;
+            let notes = super::carried::sync_notes(self.r, &self.carried, count.0, |slot| count.1[slot]);
+            let at = at.min(self.not_comparable.len());
+            self.not_comparable.splice(at..at, notes);
+        }
         let pecks = self.keycmp.pecks();
         if super::carried::key_points_comparable(self) {
             std::mem::take(&mut self.keycmp).finish(self, keys.reversals);
@@ -720,6 +785,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
         if self.carried.rpm {
             self.end_state();
         }
+        self.attribute_late();
         (self.compact_trace(), pecks)
     }
 

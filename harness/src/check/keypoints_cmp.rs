@@ -14,7 +14,7 @@ use nc_engine::trace::Signal;
 
 use super::compare::Comparator;
 use super::keypoints::{KeyPoints, Segment};
-use super::tolerance::{attribute, mm_nm, ms_us, Topic};
+use super::tolerance::{mm_nm, ms_us, Topic};
 use super::Divergence;
 use crate::scenario::timeline::{fixed, ms};
 
@@ -36,12 +36,13 @@ const REC: usize = 1;
 /// Divergences of one check found so far, the first [`super::MAX_PER_CHECK`] kept.
 #[derive(Debug, Default)]
 struct Found {
-    kept: Vec<Divergence>,
+    /// Each with its rule (None: attributed at the end) and topic.
+    kept: Vec<(Divergence, Option<String>, Topic)>,
     more: usize,
 }
 
 impl Found {
-    fn add(&mut self, d: Divergence) {
+    fn add(&mut self, d: (Divergence, Option<String>, Topic)) {
         if self.kept.len() < super::MAX_PER_CHECK {
             self.kept.push(d);
         } else {
@@ -50,9 +51,9 @@ impl Found {
     }
 
     fn give(self, c: &mut Comparator) {
-        let check = self.kept.first().map(|d| d.check.clone());
-        for d in self.kept {
-            c.push(d);
+        let check = self.kept.first().map(|d| d.0.check.clone());
+        for (d, rule, topic) in self.kept {
+            c.push_attributed(d, rule, topic);
         }
         if let Some(check) = check {
             // Past the per-check bound: counted as `push` counts them.
@@ -279,7 +280,8 @@ impl KeyCompare {
     }
 }
 
-/// A divergence attributed as [`Comparator::diverge`] does, kept to be given later.
+/// A divergence attributed as [`Comparator::diverge`] does (its rule, None when found at the
+/// end), kept to be given later.
 #[allow(clippy::too_many_arguments)]
 fn divergence(
     c: &Comparator,
@@ -290,14 +292,15 @@ fn divergence(
     e: String,
     a: String,
     m: String,
-) -> Divergence {
-    Divergence {
-        rule: attribute(topic, &c.context(t)),
+) -> (Divergence, Option<String>, Topic) {
+    let d = Divergence {
+        rule: String::new(),
         check: check.into(),
         what,
         t_us: Some(t),
         expected: e,
         actual: a,
         margin: m,
-    }
+    };
+    (d, c.attribute_now(topic, t), topic)
 }

@@ -59,8 +59,12 @@ pub struct Skeleton {
     pub spindle_turns: bool,
     /// Each axis is somewhere else than at the first sample at some sample.
     pub moves: [bool; AXES],
-    /// The phases by time.
+    /// The phases by time (lean: none, the comparison reads them alongside).
     pub phases: Vec<(i64, Phase)>,
+    /// The first overload retract's time.
+    pub first_overload: Option<i64>,
+    /// The reference cuts (a `cutting` phase) at some time.
+    pub cuts: bool,
     /// The inputs by time (name, value).
     pub inputs: Vec<(i64, String, String)>,
     /// Only the end is kept in `events` (only the scenario's temporal rules need the phases,
@@ -81,6 +85,10 @@ impl TraceSink for Skeleton {
         let mut planner = super::sync::Planner::new(meta.dialect);
         if self.fused.is_some() {
             planner.edges = Some(Vec::new());
+        }
+        if self.lean {
+            // The moves are read alongside the comparison: only whether there are lead blocks.
+            planner = planner.without_list();
         }
         self.planner = Some(planner);
     }
@@ -111,7 +119,15 @@ impl TraceSink for Skeleton {
                 self.summary.event(ev.t_us as i64, e);
                 match e {
                     Event::Signal { signal, value } => self.tap.signal(*signal, *value),
-                    Event::Phase(p) => self.phases.push((ev.t_us as i64, *p)),
+                    Event::Phase(p) => {
+                        if *p == Phase::OverloadRetract {
+                            self.first_overload.get_or_insert(ev.t_us as i64);
+                        }
+                        self.cuts |= *p == Phase::Cutting;
+                        if !self.lean {
+                            self.phases.push((ev.t_us as i64, *p));
+                        }
+                    }
                     Event::Input { name, value } => {
                         self.inputs.push((ev.t_us as i64, name.clone(), value.clone()))
                     }
@@ -146,11 +162,18 @@ impl Skeleton {
     /// [`Skeleton::of`], keeping only the end among [`Skeleton::events`] when `lean` (a
     /// comparison without temporal rules: memory does not follow the number of events).
     pub fn of_lean(source: Source, lean: bool) -> Skeleton {
-        let fused = super::survey_fused::Fused::new(lean);
-        let mut sk = Skeleton { lean, fused: Some(Box::new(fused)), ..Skeleton::default() };
+        // A lean pass reads no key points and no spans (the comparison reads them alongside).
+        let fused = (!lean).then(|| Box::new(super::survey_fused::Fused::new(lean)));
+        let mut sk = Skeleton { lean, fused, ..Skeleton::default() };
         source.replay(&mut sk);
         sk.summary.finish();
         sk
+    }
+
+    /// Whether the run has thread blocks found by their lead (KND G32 without phases): their
+    /// moves are not read alongside the comparison.
+    pub fn has_lead_blocks(&self) -> bool {
+        self.planner.as_ref().is_some_and(|p| p.has_lead_blocks())
     }
 
     /// Whether only the end was kept in [`Skeleton::events`].
@@ -380,7 +403,7 @@ pub struct Survey {
 
 /// `v0 + (v1 − v0) · f` at `t` between the samples `p` (at or before `t`) and `n`, as
 /// `Reference::value_at`.
-fn interp(p: &(i64, Sample), n: (i64, &Sample), t: i64) -> [f64; AXES] {
+pub(super) fn interp(p: &(i64, Sample), n: (i64, &Sample), t: i64) -> [f64; AXES] {
     let f = (t - p.0) as f64 / (n.0 - p.0).max(1) as f64;
     let mut out = [0.0; AXES];
     for (k, o) in out.iter_mut().enumerate() {

@@ -7,9 +7,15 @@ use std::sync::mpsc::{Receiver, SyncSender};
 
 use nc_engine::trace::{Event, Sample, TraceEvent, TraceMeta, TraceSink};
 
+use std::collections::VecDeque;
+
+use nc_engine::trace::{Phase, AXES};
+
 use super::events::Key;
 use super::keypoints::{KeyPoints, KeyTracker};
 use super::reference::{unwrap_delta, Tap};
+use super::sync::Window as Move;
+use super::sync_stream::SyncStream;
 
 /// Samples sent at once by a [`ChannelSink`].
 const BATCH: usize = 2048;
@@ -36,6 +42,12 @@ pub struct Batch {
     pub keys: KeyPoints,
     /// The end of the run: its spindle reversals in rigid tapping (the key points' count).
     pub reversals: Option<u32>,
+    /// The synchronised moves found, in time order, and the phases read.
+    pub moves: Vec<Move>,
+    /// The phases read.
+    pub phases: Vec<(i64, Phase)>,
+    /// Every move starting before this time has been sent.
+    pub complete: i64,
 }
 
 /// A window of the reference's samples, in time order.
@@ -69,6 +81,21 @@ pub struct Window<'a> {
     pub reversals: Option<u32>,
     /// Reads the key points of a trace in memory.
     tracker: Option<KeyTracker>,
+    /// Reads the synchronised moves and phases of a trace in memory.
+    stream: Option<SyncStream>,
+    /// The reference's synchronised moves pulled (when `keyed_wanted`), in time order, from the
+    /// one numbered `moves_base` in the run on: those the comparison may still look up.
+    pub moves: VecDeque<Move>,
+    /// The index of `moves[0]` among all the moves.
+    pub moves_base: usize,
+    /// Every move starting before this time has been pulled.
+    pub moves_complete: i64,
+    /// The moves pulled: how many, how many of each axis.
+    pub moves_count: (usize, [usize; AXES]),
+    /// The phases pulled that the comparison may still look up (the last before its time on).
+    pub phases: VecDeque<(i64, Phase)>,
+    /// Moves and phases are held for the times from this one on (older ones were dropped).
+    pub held_from: i64,
     /// Samples after this time are not kept (all but the first: [`Window::drain`]).
     keep_until: i64,
 }
@@ -77,8 +104,14 @@ impl<'a> Window<'a> {
     /// A window fed by `feed`, that collects the discrete events in [`Window::keyed`] and the
     /// key points (for the reference's tap `tap`) in [`Window::keys`] when `keyed` (read here
     /// from a trace in memory; a [`ChannelSink`] sends them when made to).
-    pub(crate) fn with_keyed(feed: Feed<'a>, keyed: bool, tap: Option<Tap>) -> Window<'a> {
-        let tracker = (keyed && matches!(feed, Feed::Trace(_))).then(|| KeyTracker::new(tap));
+    pub(crate) fn with_keyed(feed: Feed<'a>, keyed: bool, tap: Option<Tap>, meta: &TraceMeta) -> Window<'a> {
+        let here = keyed && matches!(feed, Feed::Trace(_));
+        let tracker = here.then(|| KeyTracker::new(tap));
+        let stream = here.then(|| {
+            let mut s = SyncStream::new(tap);
+            s.start(meta);
+            s
+        });
         Window {
             t: Vec::new(),
             s: Vec::new(),
@@ -94,6 +127,13 @@ impl<'a> Window<'a> {
             keys: KeyPoints::default(),
             reversals: None,
             tracker,
+            stream,
+            moves: VecDeque::new(),
+            moves_base: 0,
+            moves_complete: i64::MIN,
+            moves_count: (0, [0; AXES]),
+            phases: VecDeque::new(),
+            held_from: i64::MIN,
             keep_until: i64::MAX,
         }
     }
@@ -126,6 +166,18 @@ impl<'a> Window<'a> {
                             k.take(&mut self.keys);
                         }
                     }
+                    if let Some(st) = &mut self.stream {
+                        st.event(e);
+                        let (moves, phases, complete) =
+                            (std::mem::take(&mut st.out), std::mem::take(&mut st.phases), st.complete());
+                        let held = (
+                            &mut self.moves,
+                            &mut self.phases,
+                            &mut self.moves_count,
+                            &mut self.moves_complete,
+                        );
+                        add_moves(held, moves, phases, complete);
+                    }
                     if let Event::Sample(s) = &e.event {
                         let (t, s) = (e.t_us as i64, *s);
                         self.push(t, s);
@@ -143,6 +195,10 @@ impl<'a> Window<'a> {
                     self.keys.returns.append(&mut rest.returns);
                     self.reversals = Some(rest.reversals);
                 }
+                if let Some(mut st) = self.stream.take() {
+                    st.finish();
+                    self.add_moves(std::mem::take(&mut st.out), std::mem::take(&mut st.phases), i64::MAX);
+                }
                 self.feed = Feed::Done;
                 false
             }
@@ -158,6 +214,7 @@ impl<'a> Window<'a> {
                     if batch.reversals.is_some() {
                         self.reversals = batch.reversals;
                     }
+                    self.add_moves(batch.moves, batch.phases, batch.complete);
                     true
                 }
                 Err(_) => {
@@ -166,6 +223,44 @@ impl<'a> Window<'a> {
                 }
             },
             Feed::Done => false,
+        }
+    }
+
+    fn add_moves(&mut self, moves: Vec<Move>, phases: Vec<(i64, Phase)>, complete: i64) {
+        add_moves(
+            (&mut self.moves, &mut self.phases, &mut self.moves_count, &mut self.moves_complete),
+            moves,
+            phases,
+            complete,
+        );
+    }
+
+    /// Pulls until every synchronised move starting at or before `t` is held (or the run has no
+    /// more): the samples up to the end of the move in force at `t` are held too.
+    pub fn ensure_moves(&mut self, t: i64) {
+        while self.moves_complete <= t {
+            if !self.pull() {
+                self.moves_complete = i64::MAX;
+                break;
+            }
+        }
+    }
+
+    /// Drops the moves and phases that no time from `floor` on looks up (a move ended before it,
+    /// the phases before the last one at or before it).
+    pub fn prune_moves(&mut self, floor: i64) {
+        let mut dropped = false;
+        while self.moves.front().is_some_and(|m| m.t1 < floor) {
+            self.moves.pop_front();
+            self.moves_base += 1;
+            dropped = true;
+        }
+        while self.phases.len() >= 2 && self.phases[1].0 <= floor {
+            self.phases.pop_front();
+            dropped = true;
+        }
+        if dropped {
+            self.held_from = self.held_from.max(floor);
         }
     }
 
@@ -241,6 +336,8 @@ pub struct ChannelSink {
     keyed: bool,
     /// Reads the key points (when `keyed`).
     tracker: Option<KeyTracker>,
+    /// Reads the synchronised moves and the phases (when `keyed`).
+    stream: Option<SyncStream>,
     gone: bool,
 }
 
@@ -249,7 +346,8 @@ impl ChannelSink {
     /// tap `tap`) too when `keyed`.
     pub fn new(tx: SyncSender<Batch>, keyed: bool, tap: Option<Tap>) -> ChannelSink {
         let tracker = keyed.then(|| KeyTracker::new(tap));
-        ChannelSink { tx, buf: ChannelSink::batch(), keyed, tracker, gone: false }
+        let stream = keyed.then(|| SyncStream::new(tap));
+        ChannelSink { tx, buf: ChannelSink::batch(), keyed, tracker, stream, gone: false }
     }
 
     fn batch() -> Batch {
@@ -264,6 +362,9 @@ impl ChannelSink {
             self.buf.keys.returns.append(&mut rest.returns);
             self.buf.reversals = Some(rest.reversals);
         }
+        if let Some(st) = &mut self.stream {
+            st.finish();
+        }
         self.flush();
     }
 
@@ -272,11 +373,18 @@ impl ChannelSink {
         if let Some(k) = &mut self.tracker {
             k.take(&mut self.buf.keys);
         }
+        if let Some(st) = &mut self.stream {
+            self.buf.moves.append(&mut st.out);
+            self.buf.phases.append(&mut st.phases);
+            self.buf.complete = st.complete();
+        }
         let empty = self.buf.samples.is_empty()
             && self.buf.keyed.is_empty()
             && self.buf.keys.segments.is_empty()
             && self.buf.keys.returns.is_empty()
-            && self.buf.reversals.is_none();
+            && self.buf.reversals.is_none()
+            && self.buf.moves.is_empty()
+            && self.buf.phases.is_empty();
         if !empty && !self.gone {
             let b = std::mem::take(&mut self.buf);
             self.gone = self.tx.send(b).is_err();
@@ -285,10 +393,17 @@ impl ChannelSink {
 }
 
 impl TraceSink for ChannelSink {
-    fn start(&mut self, _meta: &TraceMeta) {}
+    fn start(&mut self, meta: &TraceMeta) {
+        if let Some(st) = &mut self.stream {
+            st.start(meta);
+        }
+    }
     fn event(&mut self, ev: &TraceEvent) {
         if let Some(k) = &mut self.tracker {
             k.event(ev.t_us as i64, &ev.event);
+        }
+        if let Some(st) = &mut self.stream {
+            st.event(ev);
         }
         if let Event::Sample(s) = &ev.event {
             self.buf.samples.push((ev.t_us as i64, *s));
@@ -305,6 +420,22 @@ impl TraceSink for ChannelSink {
     fn wants_stop(&self) -> bool {
         self.gone
     }
+}
+
+/// The moves, phases, counts and completeness of a [`Window`].
+type Held<'w> =
+    (&'w mut VecDeque<Move>, &'w mut VecDeque<(i64, Phase)>, &'w mut (usize, [usize; AXES]), &'w mut i64);
+
+/// Adds the moves and phases pulled, every move before `complete` among them.
+fn add_moves(held: Held, moves: Vec<Move>, phases: Vec<(i64, Phase)>, complete: i64) {
+    let (q, p, count, c) = held;
+    for m in &moves {
+        count.0 += 1;
+        count.1[m.slot] += 1;
+    }
+    q.extend(moves);
+    p.extend(phases);
+    *c = complete;
 }
 
 /// `v.partition_point(before)` found by walking from `from` (at most 64 steps, else a binary

@@ -17,7 +17,7 @@ impl Comparator<'_, '_> {
             self.cur_sync = None;
             return;
         };
-        let w = r.sync[k];
+        let w = r.sync_window(k);
         if !self.carried.angle || !self.carried.axis(w.slot) {
             return;
         }
