@@ -36,6 +36,9 @@ pub struct Carried {
     /// Signals are read from periodic samples (CSV rows): a pulse shorter than the gap between
     /// two rows may fall between them.
     pub sampled: bool,
+    /// It shows no edge of a signal it does not declare (CSV, VCD: their columns and variables
+    /// are known from the start; an SHDR key may name any signal).
+    pub closed: bool,
 }
 
 impl Default for Carried {
@@ -50,6 +53,7 @@ impl Default for Carried {
             rpm: true,
             angle: true,
             sampled: false,
+            closed: false,
         }
     }
 }
@@ -71,11 +75,12 @@ impl Carried {
             rpm: meta.spindle.0,
             angle: meta.spindle.1,
             sampled: false,
+            closed: false,
         };
         match meta.format {
             Format::Jsonl => Carried { source: "jsonl".into(), ..Carried::default() },
-            Format::Csv => Carried { signals: Some(signals), sampled: true, ..base },
-            Format::Vcd => Carried { signals: Some(signals), ..base },
+            Format::Csv => Carried { signals: Some(signals), sampled: true, closed: true, ..base },
+            Format::Vcd => Carried { signals: Some(signals), closed: true, ..base },
             Format::Shdr => {
                 for s in [Signal::Stl, Signal::Spl] {
                     if !signals.contains(&s) {
@@ -253,6 +258,22 @@ pub(super) fn judge_missing_edges(c: &mut Comparator) {
         Some(x) => x.1 += 1,
         None => v.push((s, 1)),
     };
+    // The edges of signals a closed recording does not declare, counted as they came instead of
+    // listed (`Comparator::absent_refs`): every one is missing, each signal in the order of its
+    // first edge (then of its key, as the matcher lists what it never matched).
+    let mut firsts: Vec<((i64, Key), Signal, usize)> = Vec::new();
+    for (k, n, t) in std::mem::take(&mut c.absent_refs) {
+        let Key::Edge(s, _) = k else { continue };
+        match firsts.iter_mut().find(|x| x.1 == s) {
+            Some(x) => {
+                x.2 += n;
+                x.0 = x.0.clone().min((t, k));
+            }
+            None => firsts.push(((t, k), s, n)),
+        }
+    }
+    firsts.sort_by(|a, b| a.0.cmp(&b.0));
+    absent.extend(firsts.into_iter().map(|x| (x.1, x.2)));
     let is_missing =
         |s: Signal, v: bool, t: i64| missing.iter().any(|(k, tm)| *k == Key::Edge(s, v) && *tm == t);
     for (k, tr) in &missing {

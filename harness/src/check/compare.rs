@@ -74,6 +74,9 @@ pub struct Comparator<'r, 'a> {
     keycmp: KeyCompare,
     /// Divergences kept whose rule is found at the end (index, topic, time).
     unattributed: Vec<(usize, Topic, i64)>,
+    /// The reference's edges of signals a closed recording does not declare (it cannot show
+    /// them: never matched): key, how many, the first's time.
+    pub(super) absent_refs: Vec<(Key, usize, i64)>,
     /// Where the notes on the synchronisation error go among [`Comparator::not_comparable`],
     /// once the reference's synchronised moves are all read (streamed).
     sync_notes_at: Option<usize>,
@@ -208,6 +211,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             keys: KeyTracker::new(r.tap),
             keycmp: KeyCompare::default(),
             unattributed: Vec::new(),
+            absent_refs: Vec::new(),
             sync_notes_at: None,
             findings: Vec::new(),
             sig: Signals::default(),
@@ -317,7 +321,15 @@ impl<'r, 'a> Comparator<'r, 'a> {
         }
         if let Some(m) = &mut self.matcher {
             for (tr, k) in w.keyed.drain(..) {
-                m.reference(k, tr);
+                match k {
+                    Key::Edge(s, _) if self.carried.closed && !self.carried.declares(s) => {
+                        match self.absent_refs.iter_mut().find(|x| x.0 == k) {
+                            Some(x) => x.1 += 1,
+                            None => self.absent_refs.push((k, 1, tr)),
+                        }
+                    }
+                    _ => m.reference(k, tr),
+                }
             }
         } else {
             w.keyed.clear();
