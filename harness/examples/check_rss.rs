@@ -101,11 +101,12 @@ fn main() {
             let secs = start.elapsed().as_secs_f64();
             let rows = rep.figures.recorded_samples;
             println!(
-                "{fmt}: rows {rows}, {secs:.3} s, {:.2} M rows/s, conformant {}, divergences {}, reference samples held at most {}, VmHWM {}",
+                "{fmt}: rows {rows}, {secs:.3} s, {:.2} M rows/s, conformant {}, divergences {}, reference samples held at most {}, other records {}, VmHWM {}",
                 rows as f64 / secs / 1e6,
                 rep.conformant(),
                 rep.divergences.len() + rep.omitted,
                 rep.reference_samples_held,
+                rep.reference_records_held,
                 vm_hwm()
             );
         }

@@ -86,6 +86,16 @@ fn a_long_recording_finds_what_a_short_one_finds_in_a_window_that_does_not_grow(
     for r in [&short_rep, &long_rep] {
         assert!(r.reference_samples_held <= 2 * 4096 + 2048, "held {}", r.reference_samples_held);
     }
+    // Nor do its other records (edges and functions waiting to be matched, synchronised moves,
+    // phases, key points waiting for their pair): 400 holes are 2,400 edges, 800 strokes.
+    assert!(long_rep.reference_records_held > 0);
+    assert!(
+        long_rep.reference_records_held <= short_rep.reference_records_held + 8,
+        "held {} for 400 holes, {} for 10",
+        long_rep.reference_records_held,
+        short_rep.reference_records_held
+    );
+    assert!(long_rep.reference_records_held < 100, "held {}", long_rep.reference_records_held);
     let samples = t2.samples().count();
     assert!(
         long_rep.reference_samples_held * 10 < samples,

@@ -155,6 +155,10 @@ pub struct Comparator<'r, 'a> {
     marks: Vec<(i64, i64)>,
     /// The most reference events waiting in the matcher at once.
     pub peak_waiting: usize,
+    /// The most records of the reference held at once by the comparison besides its samples
+    /// (events waiting in the matcher, synchronised moves and phases, key points waiting for
+    /// their pair; each one's most, summed): a figure for the memory bound.
+    pub records_held: usize,
     handshake: super::handshake::Handshake,
     ref_handshake: Vec<super::handshake::Fault>,
 }
@@ -258,6 +262,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             motion,
             marks: Vec::new(),
             peak_waiting: 0,
+            records_held: 0,
             handshake: Default::default(),
             ref_handshake: r.summary.faults.clone(),
         }
@@ -791,6 +796,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             self.not_comparable.splice(at..at, notes);
         }
         let pecks = self.keycmp.pecks();
+        self.records_held = self.peak_waiting + self.keycmp.peak + self.r.win.borrow().held_peak;
         if super::carried::key_points_comparable(self) {
             std::mem::take(&mut self.keycmp).finish(self, keys.reversals);
         }

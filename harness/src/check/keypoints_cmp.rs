@@ -89,6 +89,8 @@ pub struct KeyCompare {
     found: [Found; 4],
     /// The reference's reversals (known at its end).
     pub ref_reversals: u32,
+    /// Most points and pauses waiting for their pair at once (a figure for the memory bound).
+    pub peak: usize,
 }
 
 impl KeyCompare {
@@ -146,6 +148,10 @@ impl KeyCompare {
             }
             self.returns[side].push_back(r);
         }
+        let waiting = |q: &[VecDeque<KeyPoint>; 2]| q[0].len() + q[1].len();
+        let pauses = self.pauses[0].len() + self.pauses[1].len();
+        let held = waiting(&self.pecks) + waiting(&self.retracts) + waiting(&self.returns) + pauses;
+        self.peak = self.peak.max(held);
         self.pair(c);
     }
 

@@ -159,6 +159,10 @@ pub struct Report {
     /// Most reference samples held at once by the comparison.
     #[serde(skip)]
     pub reference_samples_held: usize,
+    /// Most other records of the reference held at once by the comparison (its events waiting
+    /// to be matched, synchronised moves, phases, key points waiting for their pair).
+    #[serde(skip)]
+    pub reference_records_held: usize,
     /// Wall time of the comparison, s (JUnit `time`).
     pub seconds: f64,
 }
@@ -356,6 +360,7 @@ fn compare(
         series: std::mem::take(&mut c.series),
         reference: Trace { meta: r.trace.meta.clone(), events: Vec::new() },
         reference_samples_held: r.win.borrow().peak,
+        reference_records_held: c.records_held,
         seconds: started.elapsed().as_secs_f64(),
     };
     drop(c);

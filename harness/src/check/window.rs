@@ -96,6 +96,8 @@ pub struct Window<'a> {
     pub phases: VecDeque<(i64, Phase)>,
     /// Moves and phases are held for the times from this one on (older ones were dropped).
     pub held_from: i64,
+    /// Most moves and phases held at once (a figure for the memory bound).
+    pub held_peak: usize,
     /// Samples after this time are not kept (all but the first: [`Window::drain`]).
     keep_until: i64,
 }
@@ -134,6 +136,7 @@ impl<'a> Window<'a> {
             moves_count: (0, [0; AXES]),
             phases: VecDeque::new(),
             held_from: i64::MIN,
+            held_peak: 0,
             keep_until: i64::MAX,
         }
     }
@@ -177,6 +180,7 @@ impl<'a> Window<'a> {
                             &mut self.moves_complete,
                         );
                         add_moves(held, moves, phases, complete);
+                        self.held_peak = self.held_peak.max(self.moves.len() + self.phases.len());
                     }
                     if let Event::Sample(s) = &e.event {
                         let (t, s) = (e.t_us as i64, *s);
@@ -233,6 +237,7 @@ impl<'a> Window<'a> {
             phases,
             complete,
         );
+        self.held_peak = self.held_peak.max(self.moves.len() + self.phases.len());
     }
 
     /// Pulls until every synchronised move starting at or before `t` is held (or the run has no
