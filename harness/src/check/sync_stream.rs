@@ -77,6 +77,10 @@ impl SyncStream {
     }
 
     fn sample(&mut self, t: i64, s: &Sample) {
+        if self.tracks.is_empty() {
+            self.prev = Some((t, *s));
+            return;
+        }
         let mut done = false;
         for x in self.tracks.iter_mut().filter(|x| !x.done) {
             let o = &mut x.span;

@@ -404,19 +404,28 @@ impl TraceSink for ChannelSink {
         }
     }
     fn event(&mut self, ev: &TraceEvent) {
+        if let Event::Sample(s) = &ev.event {
+            // Copied first (the sample the run has just written is read once from its stores).
+            self.buf.samples.push((ev.t_us as i64, *s));
+            if let Some(k) = &mut self.tracker {
+                k.event(ev.t_us as i64, &ev.event);
+            }
+            if let Some(st) = &mut self.stream {
+                st.event(ev);
+            }
+            if self.buf.samples.len() >= BATCH {
+                self.flush();
+                self.buf = ChannelSink::batch();
+            }
+            return;
+        }
         if let Some(k) = &mut self.tracker {
             k.event(ev.t_us as i64, &ev.event);
         }
         if let Some(st) = &mut self.stream {
             st.event(ev);
         }
-        if let Event::Sample(s) = &ev.event {
-            self.buf.samples.push((ev.t_us as i64, *s));
-            if self.buf.samples.len() >= BATCH {
-                self.flush();
-                self.buf = ChannelSink::batch();
-            }
-        } else if self.keyed {
+        if self.keyed {
             if let Some(k) = Key::of(&ev.event) {
                 self.buf.keyed.push((ev.t_us as i64, k));
             }
