@@ -229,23 +229,14 @@ impl TraceSink for Detectors {
     }
 }
 
-/// `moves.partition_point(|m| m.t0 <= t)` over the two halves of a queue of moves, looked for
-/// from `h` (the last answer) first: the comparison walks forward.
-fn next_move(moves: (&[super::sync::Window], &[super::sync::Window]), h: usize, t: i64) -> usize {
-    let n = moves.0.len() + moves.1.len();
-    let get = |i: usize| if i < moves.0.len() { moves.0.get(i) } else { moves.1.get(i - moves.0.len()) };
-    match (get(h), get(h + 1)) {
+/// `moves.partition_point(|m| m.t0 <= t)`, looked for from `h` (the last answer) first: the
+/// comparison walks forward.
+fn next_move(moves: &[super::sync::Window], h: usize, t: i64) -> usize {
+    match (moves.get(h), moves.get(h + 1)) {
         (Some(a), Some(b)) if a.t0 <= t && b.t0 > t => h + 1,
         (Some(a), None) if a.t0 <= t => h + 1,
-        (_, Some(b)) if b.t0 <= t && get(h + 2).is_none_or(|c| c.t0 > t) => h + 2,
-        _ => {
-            let k0 = moves.0.partition_point(|w| w.t0 <= t);
-            if k0 < moves.0.len() {
-                k0
-            } else {
-                (moves.0.len() + moves.1.partition_point(|w| w.t0 <= t)).min(n)
-            }
-        }
+        (_, Some(b)) if b.t0 <= t && moves.get(h + 2).is_none_or(|c| c.t0 > t) => h + 2,
+        _ => moves.partition_point(|w| w.t0 <= t),
     }
 }
 
@@ -443,7 +434,9 @@ impl<'a> Reference<'a> {
     pub fn forget_before(&self, floor: i64) {
         let mut w = self.win.borrow_mut();
         w.prune(floor);
-        if self.streamed {
+        if self.streamed && w.moves.front().is_some_and(|m| m.t1 < floor)
+            || w.phases.get(1).is_some_and(|p| p.0 <= floor)
+        {
             w.prune_moves(floor);
         }
     }
@@ -473,12 +466,14 @@ impl<'a> Reference<'a> {
             w.ensure_moves(t);
             let base = w.moves_base;
             let h = self.sync_hint.get().saturating_sub(base);
-            let k = next_move(w.moves.as_slices(), h, t);
+            // Contiguous (`window::add_moves`); else the lookup is over the first part.
+            let moves = w.moves.as_slices().0;
+            let k = next_move(moves, h, t);
             self.sync_hint.set(base + k.saturating_sub(1));
-            return k.checked_sub(1).filter(|&i| t <= w.moves[i].t1).map(|i| base + i);
+            return k.checked_sub(1).filter(|&i| t <= moves[i].t1).map(|i| base + i);
         }
         let h = self.sync_hint.get();
-        let k = next_move((&self.sync, &[]), h, t);
+        let k = next_move(&self.sync, h, t);
         self.sync_hint.set(k.saturating_sub(1));
         k.checked_sub(1).filter(|&i| t <= self.sync[i].t1)
     }

@@ -447,7 +447,11 @@ fn add_moves(held: Held, moves: Vec<Move>, phases: Vec<(i64, Phase)>, complete: 
         count.0 += 1;
         count.1[m.slot] += 1;
     }
-    q.extend(moves);
+    if !moves.is_empty() {
+        q.extend(moves);
+        // One slice for the lookups (`Reference::sync_index`): a few moves, once a batch.
+        q.make_contiguous();
+    }
     p.extend(phases);
     *c = complete;
 }
