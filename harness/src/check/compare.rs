@@ -552,7 +552,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             Event::Sample(s) => {
                 self.samples_seen += 1;
                 self.r.forget_before(t - self.floor_us);
-                if self.samples_seen % 128 == 0 {
+                if self.samples_seen.is_multiple_of(128) {
                     // What the replay alongside sent with the samples, taken now and then
                     // (memory; the matcher takes what it needs before each recorded event).
                     self.take_reference_events(None);
