@@ -227,10 +227,13 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
     check_source(Source::Trace(reference), recorded, spec)
 }
 
-/// Compares the recorded events with the reference run `source`. A run (the engine) is replayed:
-/// twice to index it (its discrete events, tap, key points, synchronised moves), then once more
-/// on another thread, alongside the recorded stream, its samples held only around the recorded
-/// time: memory does not follow the length of the run or of the recording.
+/// Compares the recorded events with the reference run `source`. A run (the engine) is replayed
+/// once to index it (its tap, a summary of its events; with temporal rules, or thread blocks
+/// found by their lead, its discrete events, key points and synchronised moves too, in one or
+/// two passes), then once more on another thread, alongside the recorded stream: its samples,
+/// and without temporal rules its events, key points, synchronised moves and phases, held only
+/// around the recorded time (DEC-162; one more replay at the end attributes divergences at times
+/// no longer held): memory does not follow the length of the run or of the recording.
 pub fn check_source(
     source: Source,
     recorded: impl IntoIterator<Item = TraceEvent>,

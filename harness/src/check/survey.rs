@@ -1,7 +1,9 @@
 //! The passes over the reference run that index it without keeping its samples: the first keeps
-//! its discrete events (the "skeleton") and finds the tap; the second, knowing the tap, reads its
-//! key points and the figures of its synchronised moves (`check::sync`). The comparison then
-//! reads the samples a third time through a sliding [`super::window::Window`].
+//! its discrete events (the "skeleton"; lean, a summary of them only) and finds the tap; the
+//! second, knowing the tap, reads its key points and the figures of its synchronised moves
+//! (`check::sync`; read in the first when it can be, `survey_fused`; lean, alongside the
+//! comparison, `check::sync_stream`). The comparison then reads the samples again through a
+//! sliding [`super::window::Window`].
 //!
 //! A [`Source`] is a reference run that can be replayed as often as needed: a trace in memory,
 //! or the engine run again (it is deterministic), through the engine's public API.
