@@ -73,8 +73,9 @@ pub struct Comparator<'r, 'a> {
     keys: KeyTracker,
     /// Both traces' key points compared stroke by stroke.
     keycmp: KeyCompare,
-    /// Divergences kept whose rule is found at the end (index, topic, time).
-    unattributed: Vec<(usize, Topic, i64)>,
+    /// Divergences kept whose rule is found at the end (index, topic, time, an overload retract
+    /// begun by their worst point).
+    unattributed: Vec<(usize, Topic, i64, bool)>,
     /// The reference's edges of signals a closed recording does not declare (it cannot show
     /// them: never matched): key, how many, the first's time.
     pub(super) absent_refs: Vec<(Key, usize, i64)>,
@@ -353,7 +354,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
             actual: a,
             margin: m,
         };
-        self.push_attributed(d, rule, topic);
+        self.push_attributed(d, rule, topic, false);
     }
 
     /// One recorded event, time as recorded.

@@ -53,7 +53,7 @@ impl Found {
     fn give(self, c: &mut Comparator) {
         let check = self.kept.first().map(|d| d.0.check.clone());
         for (d, rule, topic) in self.kept {
-            c.push_attributed(d, rule, topic);
+            c.push_attributed(d, rule, topic, false);
         }
         if let Some(check) = check {
             // Past the per-check bound: counted as `push` counts them.

@@ -108,8 +108,10 @@ impl Comparator<'_, '_> {
         late.sort_by_key(|x| x.2);
         let times = late.iter().map(|x| x.2).collect();
         let moments = super::super::sync_stream::Sweep::new(self.r.tap, times).run(self.r.source);
-        for ((i, topic, t), m) in late.into_iter().zip(moments) {
-            let rule = attribute(topic, &self.context_from(t, m));
+        for ((i, topic, t, overload), m) in late.into_iter().zip(moments) {
+            let mut ctx = self.context_from(t, m);
+            ctx.overload |= overload;
+            let rule = attribute(topic, &ctx);
             if let Some(d) = self.divergences.get_mut(i) {
                 d.rule = rule;
             }
@@ -123,12 +125,13 @@ impl Comparator<'_, '_> {
         mut d: Divergence,
         rule: Option<String>,
         topic: Topic,
+        overload: bool,
     ) {
         let late = rule.is_none();
         d.rule = rule.unwrap_or_default();
         let t = d.t_us.unwrap_or(0);
         if let (Some(i), true) = (self.push(d), late) {
-            self.unattributed.push((i, topic, t));
+            self.unattributed.push((i, topic, t, overload));
         }
     }
 
