@@ -165,7 +165,7 @@ impl Skeleton {
     /// comparison without temporal rules: memory does not follow the number of events).
     pub fn of_lean(source: Source, lean: bool) -> Skeleton {
         // A lean pass reads no key points and no spans (the comparison reads them alongside).
-        let fused = (!lean).then(|| Box::new(super::survey_fused::Fused::new(lean)));
+        let fused = (!lean).then(Box::default);
         let mut sk = Skeleton { lean, fused, ..Skeleton::default() };
         source.replay(&mut sk);
         sk.summary.finish();
@@ -213,8 +213,8 @@ impl Skeleton {
     /// What the second pass ([`Survey`]) would give for `plan` (the key points and the plan's
     /// spans), read in this one; `None` when it could not be (the tap guessed from the first
     /// stroke was not the run's, the plan has lead blocks, or too many events came before the
-    /// first stroke): the second pass is then needed. A lean pass reads no key points (the
-    /// comparison reads them alongside): none are given, and no tap is guessed.
+    /// first stroke): the second pass is then needed. A lean pass reads neither (the comparison
+    /// reads them alongside): `None`.
     pub fn fused_survey(
         &mut self,
         tap: Option<Tap>,

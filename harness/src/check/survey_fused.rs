@@ -37,8 +37,6 @@ pub(super) struct Fused {
     open: [Option<usize>; 2],
     active: Vec<(usize, Option<Sample>)>,
     prev: Option<(i64, Sample)>,
-    /// No key points read (the comparison reads them alongside): the spans only.
-    no_keys: bool,
 }
 
 fn axes(meta: &Option<TraceMeta>) -> &[nc_engine::trace::AxisSpec] {
@@ -46,11 +44,6 @@ fn axes(meta: &Option<TraceMeta>) -> &[nc_engine::trace::AxisSpec] {
 }
 
 impl Fused {
-    /// A second pass to read alongside the first, without the key points when `no_keys`.
-    pub(super) fn new(no_keys: bool) -> Fused {
-        Fused { no_keys, ..Fused::default() }
-    }
-
     /// A discrete event, after the first pass read it (`edges`: the spans it opened or closed).
     /// False: given up.
     pub(super) fn event(
@@ -94,9 +87,6 @@ impl Fused {
     }
 
     fn keys_event(&mut self, t: i64, ev: &Event, tap: &TapFinder, meta: &Option<TraceMeta>) -> bool {
-        if self.no_keys {
-            return true;
-        }
         if let Some(k) = &mut self.keys {
             k.event(t, ev);
             return true;
@@ -125,7 +115,7 @@ impl Fused {
         if !plan.lead.is_empty() {
             return None;
         }
-        if self.keys.is_none() && !self.no_keys {
+        if self.keys.is_none() {
             self.start_keys(tap);
         }
         let same = |a: &Option<Tap>, b: &Option<Tap>| match (a, b) {
@@ -133,7 +123,7 @@ impl Fused {
             (Some(a), Some(b)) => (a.slot, a.into_sign, a.in_signal) == (b.slot, b.into_sign, b.in_signal),
             _ => false,
         };
-        if !self.no_keys && !same(&self.guess?, &tap) {
+        if !same(&self.guess?, &tap) {
             return None;
         }
         // Spans still open end with the run (after every sample: their end is never passed).
@@ -163,8 +153,7 @@ impl Fused {
         } else {
             self.closed.iter().map(|&i| std::mem::take(&mut self.out[i])).collect()
         };
-        let keys = if self.no_keys { KeyPoints::default() } else { self.keys?.finish() };
-        Some((keys, spans))
+        Some((self.keys?.finish(), spans))
     }
 }
 
