@@ -76,9 +76,9 @@ impl SyncStream {
         self.tracks.iter().map(|x| x.t0).fold(self.t_last, i64::min)
     }
 
-    fn sample(&mut self, t: i64, s: &Sample) {
+    /// A sample at `t`, `prev` the one before it.
+    fn sample(&mut self, t: i64, s: &Sample, prev: Option<(i64, &Sample)>) {
         if self.tracks.is_empty() {
-            self.prev = Some((t, *s));
             return;
         }
         let mut done = false;
@@ -86,8 +86,8 @@ impl SyncStream {
             let o = &mut x.span;
             for (k, tk) in [x.t0, x.t1].into_iter().enumerate() {
                 if o.ends[k].is_none() && t > tk {
-                    o.ends[k] = Some(match &self.prev {
-                        Some(p) => interp(p, (t, s), tk),
+                    o.ends[k] = Some(match prev {
+                        Some((pt, p)) => interp(&(pt, *p), (t, s), tk),
                         None => held(s),
                     });
                 }
@@ -105,18 +105,18 @@ impl SyncStream {
                 done = true;
             }
         }
-        self.prev = Some((t, *s));
         if done {
             self.give();
         }
     }
 
-    fn edges(&mut self) {
+    /// The moves the last discrete event opened or closed, `prev` the last sample before it.
+    fn edges(&mut self, prev: Option<(i64, &Sample)>) {
         let edges = self.planner.edges.as_mut().map(std::mem::take).unwrap_or_default();
         for e in &edges {
             if e.open {
                 // A sample at the opening's time read before it is the move's first.
-                let first = self.prev.filter(|p| p.0 >= e.t).map(|p| p.1);
+                let first = prev.filter(|p| p.0 >= e.t).map(|p| *p.1);
                 self.tracks.push(Track {
                     t0: e.t,
                     t1: i64::MAX,
@@ -179,6 +179,12 @@ impl SyncStream {
 
     /// The end of the run: the moves still open end with it.
     pub(crate) fn finish(&mut self) {
+        let last = self.prev.map(|p| p.1);
+        self.finish_after(last.as_ref());
+    }
+
+    /// [`SyncStream::finish`], `last` the run's last sample (read by [`SyncStream::event_after`]).
+    pub(crate) fn finish_after(&mut self, last: Option<&Sample>) {
         if self.ended {
             return;
         }
@@ -188,7 +194,7 @@ impl SyncStream {
                 self.seq += 1;
             }
         }
-        let last = self.prev.map(|p| held(&p.1));
+        let last = last.map(held);
         for x in &mut self.tracks {
             for e in &mut x.span.ends {
                 if e.is_none() {
@@ -202,6 +208,25 @@ impl SyncStream {
     }
 }
 
+impl SyncStream {
+    /// The next event of the run, `prev` the last sample before it (its reader keeps it: no
+    /// copy of every sample here).
+    pub(crate) fn event_after(&mut self, ev: &TraceEvent, prev: Option<(i64, &Sample)>) {
+        let t = ev.t_us as i64;
+        self.t_last = t;
+        match &ev.event {
+            Event::Sample(s) => self.sample(t, s, prev),
+            e => {
+                if let Event::Phase(p) = e {
+                    self.phases.push((t, *p));
+                }
+                self.planner.event(ev);
+                self.edges(prev);
+            }
+        }
+    }
+}
+
 impl TraceSink for SyncStream {
     fn start(&mut self, meta: &TraceMeta) {
         self.axes = meta.axes.clone();
@@ -210,17 +235,10 @@ impl TraceSink for SyncStream {
         self.planner = planner;
     }
     fn event(&mut self, ev: &TraceEvent) {
-        let t = ev.t_us as i64;
-        self.t_last = t;
-        match &ev.event {
-            Event::Sample(s) => self.sample(t, s),
-            e => {
-                if let Event::Phase(p) = e {
-                    self.phases.push((t, *p));
-                }
-                self.planner.event(ev);
-                self.edges();
-            }
+        let prev = self.prev;
+        self.event_after(ev, prev.as_ref().map(|p| (p.0, &p.1)));
+        if let Event::Sample(s) = &ev.event {
+            self.prev = Some((ev.t_us as i64, *s));
         }
     }
 }

@@ -142,7 +142,7 @@ impl<'a> Window<'a> {
     }
 
     fn push(&mut self, t: i64, s: Sample) {
-        if self.last.is_some_and(|l| l.0 > self.keep_until) {
+        if self.keep_until != i64::MAX && self.last.is_some_and(|l| l.0 > self.keep_until) {
             return;
         }
         let acc = match self.last {
@@ -343,6 +343,8 @@ pub struct ChannelSink {
     tracker: Option<KeyTracker>,
     /// Reads the synchronised moves and the phases (when `keyed`).
     stream: Option<SyncStream>,
+    /// The last sample of the batches sent (the one before the next batch's first).
+    carry: Option<(i64, Sample)>,
     gone: bool,
 }
 
@@ -352,7 +354,7 @@ impl ChannelSink {
     pub fn new(tx: SyncSender<Batch>, keyed: bool, tap: Option<Tap>) -> ChannelSink {
         let tracker = keyed.then(|| KeyTracker::new(tap));
         let stream = keyed.then(|| SyncStream::new(tap));
-        ChannelSink { tx, buf: ChannelSink::batch(), keyed, tracker, stream, gone: false }
+        ChannelSink { tx, buf: ChannelSink::batch(), keyed, tracker, stream, carry: None, gone: false }
     }
 
     fn batch() -> Batch {
@@ -368,7 +370,8 @@ impl ChannelSink {
             self.buf.reversals = Some(rest.reversals);
         }
         if let Some(st) = &mut self.stream {
-            st.finish();
+            let last = self.buf.samples.last().or(self.carry.as_ref()).map(|p| p.1);
+            st.finish_after(last.as_ref());
         }
         self.flush();
     }
@@ -377,6 +380,9 @@ impl ChannelSink {
     pub fn flush(&mut self) {
         if let Some(k) = &mut self.tracker {
             k.take(&mut self.buf.keys);
+        }
+        if let Some(last) = self.buf.samples.last() {
+            self.carry = Some(*last);
         }
         if let Some(st) = &mut self.stream {
             self.buf.moves.append(&mut st.out);
@@ -411,7 +417,9 @@ impl TraceSink for ChannelSink {
                 k.event(ev.t_us as i64, &ev.event);
             }
             if let Some(st) = &mut self.stream {
-                st.event(ev);
+                let n = self.buf.samples.len();
+                let prev = if n >= 2 { self.buf.samples.get(n - 2) } else { self.carry.as_ref() };
+                st.event_after(ev, prev.map(|p| (p.0, &p.1)));
             }
             if self.buf.samples.len() >= BATCH {
                 self.flush();
@@ -423,7 +431,8 @@ impl TraceSink for ChannelSink {
             k.event(ev.t_us as i64, &ev.event);
         }
         if let Some(st) = &mut self.stream {
-            st.event(ev);
+            let prev = self.buf.samples.last().or(self.carry.as_ref());
+            st.event_after(ev, prev.map(|p| (p.0, &p.1)));
         }
         if self.keyed {
             if let Some(k) = Key::of(&ev.event) {
