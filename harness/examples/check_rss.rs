@@ -11,6 +11,8 @@
 //! $E write 20000 /tmp/holes            # /tmp/holes.{nc,jsonl,csv,map.yaml}: 10.6 M rows
 //! $E check /tmp/holes jsonl
 //! $E check /tmp/holes csv
+//! $E write-repeated 100000 /tmp/rep    # the same holes from a short program (G84 K1000 per row):
+//!                                      # CSV only (/tmp/rep.{nc,csv,map.yaml}), about 20 MB a 1,000 holes
 //! ```
 
 use std::io::Write;
@@ -32,6 +34,20 @@ fn vm_hwm() -> String {
         .unwrap_or_else(|| "?".into())
 }
 
+/// `n` rigid holes (a multiple of 1,000 rounded up) from a program that does not grow with them:
+/// rows of 1,000 holes 5 mm apart, each one `G84 ... K1000` block in incremental coordinates.
+fn repeated(n: usize) -> String {
+    let mut p = String::new();
+    for row in 0..n.div_ceil(1000) {
+        p.push_str(&format!(
+            "G90 G00 X0 Y{} Z10\nM29 S2000\nG91 G99 G84 X5 Y0 Z-6 R-9 F3000 K1000\nG90 G80\n",
+            row * 5
+        ));
+    }
+    p.push_str("M30\n");
+    p
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let m = Machine::new("fanuc-mill").expect("fanuc-mill");
@@ -46,6 +62,20 @@ fn main() {
             let mut w = JsonlWriter::new(f);
             m.run(&p, &RunOptions::default(), &mut w);
             w.finish().expect("writes the JSON Lines");
+            let f = std::io::BufWriter::with_capacity(
+                1 << 20,
+                std::fs::File::create(format!("{base}.csv")).expect("creates"),
+            );
+            let mut c = Csv::new(f);
+            m.run(&p, &RunOptions::default(), &mut c);
+            c.out.flush().expect("writes the CSV");
+        }
+        (Some("write-repeated"), Some(n), Some(base)) => {
+            let n: usize = n.parse().expect("N holes");
+            let text = repeated(n);
+            std::fs::write(format!("{base}.nc"), &text).expect("writes the program");
+            std::fs::write(format!("{base}.map.yaml"), MAP).expect("writes the map");
+            let p = m.parse(&text).expect("parses");
             let f = std::io::BufWriter::with_capacity(
                 1 << 20,
                 std::fs::File::create(format!("{base}.csv")).expect("creates"),
@@ -71,16 +101,17 @@ fn main() {
             let secs = start.elapsed().as_secs_f64();
             let rows = rep.figures.recorded_samples;
             println!(
-                "{fmt}: rows {rows}, {secs:.3} s, {:.2} M rows/s, conformant {}, divergences {}, reference samples held at most {}, VmHWM {}",
+                "{fmt}: rows {rows}, {secs:.3} s, {:.2} M rows/s, conformant {}, divergences {}, reference samples held at most {}, other records {}, VmHWM {}",
                 rows as f64 / secs / 1e6,
                 rep.conformant(),
                 rep.divergences.len() + rep.omitted,
                 rep.reference_samples_held,
+                rep.reference_records_held,
                 vm_hwm()
             );
         }
         _ => {
-            eprintln!("usage: check_rss write N BASE | check_rss check BASE jsonl|csv");
+            eprintln!("usage: check_rss write|write-repeated N BASE | check_rss check BASE jsonl|csv");
             std::process::exit(2)
         }
     }

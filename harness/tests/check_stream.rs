@@ -51,6 +51,15 @@ fn same(a: &Report, b: &Report, what: &str) {
     assert_eq!(a.figures, b.figures, "{what}: figures");
 }
 
+/// The comparison with the reference's whole index (a first pass that keeps its events, moves,
+/// phases and key points: DEC-162's oracle).
+fn whole(m: &Machine, p: &nc_engine::parse::Program, rec: &Trace) -> Report {
+    let run = |sink: &mut dyn TraceSink| m.run(p, &RunOptions::default(), sink);
+    let source = Source::Run(&run);
+    let skeleton = check::survey::Skeleton::of_lean(source, false);
+    check::check_surveyed(source, skeleton, rec.events.iter().cloned(), &CheckSpec::default())
+}
+
 #[test]
 fn the_engine_replayed_alongside_gives_the_verdict_of_the_reference_in_memory() {
     let (m, p, t, rec) = reference_and_recording(12);
@@ -59,6 +68,9 @@ fn the_engine_replayed_alongside_gives_the_verdict_of_the_reference_in_memory() 
     assert!(!in_memory.conformant(), "the defect is found");
     assert!(in_memory.divergences.iter().any(|d| d.check == "CHK-ENV-01"), "{:?}", in_memory.divergences);
     same(&in_memory, &streamed, "12 holes");
+    // The defect's envelope run began before the moves and phases the comparison holds when it
+    // ends: attributed at the end, as the whole index attributes it.
+    same(&whole(&m, &p, &rec), &streamed, "12 holes, the whole index");
     // The good recording passes both ways.
     let good = check::check(&t, t.events.iter().cloned(), &CheckSpec::default());
     assert!(good.conformant(), "{:?}", good.divergences);
@@ -86,6 +98,16 @@ fn a_long_recording_finds_what_a_short_one_finds_in_a_window_that_does_not_grow(
     for r in [&short_rep, &long_rep] {
         assert!(r.reference_samples_held <= 2 * 4096 + 2048, "held {}", r.reference_samples_held);
     }
+    // Nor do its other records (edges and functions waiting to be matched, synchronised moves,
+    // phases, key points waiting for their pair): 400 holes are 2,400 edges, 800 strokes.
+    assert!(long_rep.reference_records_held > 0);
+    assert!(
+        long_rep.reference_records_held <= short_rep.reference_records_held + 8,
+        "held {} for 400 holes, {} for 10",
+        long_rep.reference_records_held,
+        short_rep.reference_records_held
+    );
+    assert!(long_rep.reference_records_held < 100, "held {}", long_rep.reference_records_held);
     let samples = t2.samples().count();
     assert!(
         long_rep.reference_samples_held * 10 < samples,

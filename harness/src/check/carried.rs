@@ -36,6 +36,9 @@ pub struct Carried {
     /// Signals are read from periodic samples (CSV rows): a pulse shorter than the gap between
     /// two rows may fall between them.
     pub sampled: bool,
+    /// It shows no edge of a signal it does not declare (CSV, VCD: their columns and variables
+    /// are known from the start; an SHDR key may name any signal).
+    pub closed: bool,
 }
 
 impl Default for Carried {
@@ -50,6 +53,7 @@ impl Default for Carried {
             rpm: true,
             angle: true,
             sampled: false,
+            closed: false,
         }
     }
 }
@@ -71,11 +75,12 @@ impl Carried {
             rpm: meta.spindle.0,
             angle: meta.spindle.1,
             sampled: false,
+            closed: false,
         };
         match meta.format {
             Format::Jsonl => Carried { source: "jsonl".into(), ..Carried::default() },
-            Format::Csv => Carried { signals: Some(signals), sampled: true, ..base },
-            Format::Vcd => Carried { signals: Some(signals), ..base },
+            Format::Csv => Carried { signals: Some(signals), sampled: true, closed: true, ..base },
+            Format::Vcd => Carried { signals: Some(signals), closed: true, ..base },
             Format::Shdr => {
                 for s in [Signal::Stl, Signal::Spl] {
                     if !signals.contains(&s) {
@@ -107,10 +112,9 @@ impl Carried {
     /// 6. the first motion of the axis that moves first in the reference (a recorded one);
     /// 7. none: offset 0.
     pub fn default_anchor(&self, r: &Reference) -> Anchor {
-        let reference = &r.trace;
         let tap_slot = r.tap.map(|t| t.slot);
-        let m29 = reference.functions().any(|(_, l, c)| l == 'M' && c == 29);
-        let rises = |s: Signal| self.declares(s) && reference.edges(s).any(|(_, v)| v);
+        let m29 = r.summary.first(&Key::Function('M', 29)).is_some();
+        let rises = |s: Signal| self.declares(s) && r.summary.first(&Key::Edge(s, true)).is_some();
         if m29 && self.functions {
             return Anchor::Function('M', 29);
         }
@@ -130,7 +134,7 @@ impl Carried {
         if self.rpm && r.spindle_turns {
             return Anchor::SpindleStart;
         }
-        if reference.meta.axes.iter().any(|a| self.axis(a.index) && r.moves[a.index]) {
+        if r.trace.meta.axes.iter().any(|a| self.axis(a.index) && r.moves[a.index]) {
             return Anchor::TapMotion;
         }
         Anchor::Offset(0)
@@ -153,12 +157,13 @@ fn note(what: String, count: usize, reason: String) -> NotComparable {
     NotComparable { what, count, reason }
 }
 
-/// The names of `keys` in order of first appearance, joined.
-fn names(keys: impl Iterator<Item = Key>) -> (String, usize) {
+/// The names of the reference's keys that `pick` takes, in order of first appearance, joined,
+/// and how many events they are.
+fn names(r: &Reference, pick: impl Fn(&Key) -> bool) -> (String, usize) {
     let mut seen: Vec<String> = Vec::new();
     let mut n = 0;
-    for k in keys {
-        n += 1;
+    for (k, _, count) in r.summary.keys.iter().filter(|x| pick(&x.0)) {
+        n += count;
         let d = k.describe();
         if !seen.contains(&d) {
             seen.push(d);
@@ -170,18 +175,17 @@ fn names(keys: impl Iterator<Item = Key>) -> (String, usize) {
 /// What the recording cannot carry, known before it is read: functions, alarms, the envelope of
 /// axes it does not record, the synchronisation error without a spindle angle, the final speed
 /// without a spindle speed.
-pub(super) fn left_out(r: &Reference, skeleton: &nc_engine::trace::Trace, c: &Carried) -> Vec<NotComparable> {
+pub(super) fn left_out(r: &Reference, c: &Carried) -> (Vec<NotComparable>, Option<usize>) {
     let src = &c.source;
     let mut out = Vec::new();
-    let keys = || skeleton.events.iter().filter_map(|e| Key::of(&e.event));
     if !c.functions {
-        let (what, n) = names(keys().filter(|k| matches!(k, Key::Function(..))));
+        let (what, n) = names(r, |k| matches!(k, Key::Function(..)));
         if n > 0 {
             out.push(note(what, n, format!("{src} carries no M/S/T functions")));
         }
     }
     if !c.alarms {
-        let (what, n) = names(keys().filter(|k| matches!(k, Key::Alarm(_))));
+        let (what, n) = names(r, |k| matches!(k, Key::Alarm(_)));
         if n > 0 {
             out.push(note(what, n, format!("{src} carries no alarms")));
         }
@@ -190,7 +194,29 @@ pub(super) fn left_out(r: &Reference, skeleton: &nc_engine::trace::Trace, c: &Ca
         let l = a.letter;
         out.push(note(format!("{l} position envelope"), 0, format!("{src} records no {l} position")));
     }
-    if r.sync.is_empty() {
+    // Streamed, the synchronised moves are known at the end: their notes go here then.
+    let sync_at = r.streamed.then_some(out.len());
+    if !r.streamed {
+        let per_slot = |slot: usize| r.sync.iter().filter(|w| w.slot == slot).count();
+        out.extend(sync_notes(r, c, r.sync.len(), per_slot));
+    }
+    if !c.rpm {
+        out.push(note("final spindle speed".into(), 0, format!("{src} records no spindle speed")));
+    }
+    (out, sync_at)
+}
+
+/// The notes on the synchronisation error of a reference with `n` synchronised moves, `per_slot`
+/// of each axis, for a recording that cannot show it.
+pub(super) fn sync_notes(
+    r: &Reference,
+    c: &Carried,
+    n: usize,
+    per_slot: impl Fn(usize) -> usize,
+) -> Vec<NotComparable> {
+    let src = &c.source;
+    let mut out = Vec::new();
+    if n == 0 {
         out.push(note(
             "synchronisation error".into(),
             0,
@@ -198,7 +224,6 @@ pub(super) fn left_out(r: &Reference, skeleton: &nc_engine::trace::Trace, c: &Ca
                 .into(),
         ));
     } else if !c.angle {
-        let n = r.sync.len();
         out.push(note(
             format!("synchronisation error ({n} synchronised moves)"),
             n,
@@ -206,7 +231,7 @@ pub(super) fn left_out(r: &Reference, skeleton: &nc_engine::trace::Trace, c: &Ca
         ));
     } else {
         for a in r.axes().iter().filter(|a| !c.axis(a.index)) {
-            let n = r.sync.iter().filter(|w| w.slot == a.index).count();
+            let n = per_slot(a.index);
             if n > 0 {
                 let l = a.letter;
                 out.push(note(
@@ -216,9 +241,6 @@ pub(super) fn left_out(r: &Reference, skeleton: &nc_engine::trace::Trace, c: &Ca
                 ));
             }
         }
-    }
-    if !c.rpm {
-        out.push(note("final spindle speed".into(), 0, format!("{src} records no spindle speed")));
     }
     out
 }
@@ -236,6 +258,22 @@ pub(super) fn judge_missing_edges(c: &mut Comparator) {
         Some(x) => x.1 += 1,
         None => v.push((s, 1)),
     };
+    // The edges of signals a closed recording does not declare, counted as they came instead of
+    // listed (`Comparator::absent_refs`): every one is missing, each signal in the order of its
+    // first edge (then of its key, as the matcher lists what it never matched).
+    let mut firsts: Vec<((i64, Key), Signal, usize)> = Vec::new();
+    for (k, n, t) in std::mem::take(&mut c.absent_refs) {
+        let Key::Edge(s, _) = k else { continue };
+        match firsts.iter_mut().find(|x| x.1 == s) {
+            Some(x) => {
+                x.2 += n;
+                x.0 = x.0.clone().min((t, k));
+            }
+            None => firsts.push(((t, k), s, n)),
+        }
+    }
+    firsts.sort_by(|a, b| a.0.cmp(&b.0));
+    absent.extend(firsts.into_iter().map(|x| (x.1, x.2)));
     let is_missing =
         |s: Signal, v: bool, t: i64| missing.iter().any(|(k, tm)| *k == Key::Edge(s, v) && *tm == t);
     for (k, tr) in &missing {
@@ -286,7 +324,7 @@ pub(super) fn judge_missing_edges(c: &mut Comparator) {
 pub(super) fn key_points_comparable(c: &mut Comparator) -> bool {
     let what = "key points (pecks, depths, retract heights, bottom, pauses, return level, reversals)";
     let Some(tap) = c.r.tap else {
-        if c.r.phases.iter().any(|p| p.1 == nc_engine::trace::Phase::Cutting) {
+        if c.r.cuts {
             c.not_comparable.push(note(
                 what.into(),
                 0,
@@ -296,7 +334,7 @@ pub(super) fn key_points_comparable(c: &mut Comparator) -> bool {
         return false;
     };
     let src = c.carried.source.clone();
-    let n = c.r.keys.segments.len() + c.r.keys.returns.len();
+    let n = c.key_counts().0 + c.key_counts().1;
     if !c.carried.axis(tap.slot) {
         let l = c.r.axes().iter().find(|a| a.index == tap.slot).map_or('?', |a| a.letter);
         c.not_comparable.push(note(what.into(), n, format!("{src} records no {l} position (the tap axis)")));
@@ -310,8 +348,8 @@ pub(super) fn key_points_comparable(c: &mut Comparator) -> bool {
         ));
         return false;
     }
-    if !c.carries_signal(Signal::Rtap) && !c.r.keys.returns.is_empty() {
-        let n = c.r.keys.returns.len();
+    if !c.carries_signal(Signal::Rtap) && c.key_counts().1 > 0 {
+        let n = c.key_counts().1;
         c.not_comparable.push(note(
             "return level and spindle reversals".into(),
             n,

@@ -9,11 +9,13 @@ use nc_engine::trace::{EndSummary, Event, Sample, Signal, Signals, Trace, TraceE
 use super::carried::{Carried, NotComparable};
 use super::events::{Finding, Key, Matcher};
 use super::keypoints::KeyTracker;
+use super::keypoints_cmp::KeyCompare;
 use super::reference::{MotionDetector, Reference, Watch};
-use super::tolerance::{attribute, mm_nm, ms_us, Anchor, Context, Tolerances, Topic};
+use super::tolerance::{mm_nm, ms_us, Anchor, Context, Tolerances, Topic};
 use super::{Divergence, Point, MAX_DIVERGENCES};
 
 mod motion;
+mod streamed;
 use crate::scenario::timeline::{fixed, ms};
 
 /// Recorded samples kept in the compact copy, at most (the rest are compared and plotted, not
@@ -65,8 +67,21 @@ pub struct Comparator<'r, 'a> {
     offset: Option<i64>,
     pending: Vec<TraceEvent>,
     matcher: Option<Matcher>,
+    /// The widest event window, µs.
+    wmax: i64,
     matched: usize,
     keys: KeyTracker,
+    /// Both traces' key points compared stroke by stroke.
+    keycmp: KeyCompare,
+    /// Divergences kept whose rule is found at the end (index, topic, time, an overload retract
+    /// begun by their worst point).
+    unattributed: Vec<(usize, Topic, i64, bool)>,
+    /// The reference's edges of signals a closed recording does not declare (it cannot show
+    /// them: never matched): key, how many, the first's time.
+    pub(super) absent_refs: Vec<(Key, usize, i64)>,
+    /// Where the notes on the synchronisation error go among [`Comparator::not_comparable`],
+    /// once the reference's synchronised moves are all read (streamed).
+    sync_notes_at: Option<usize>,
     findings: Vec<Finding>,
     sig: Signals,
     /// The synchronised move of the reference being compared (index) and the error at its
@@ -140,6 +155,12 @@ pub struct Comparator<'r, 'a> {
     last_sample_t: Option<i64>,
     motion: Option<MotionDetector>,
     marks: Vec<(i64, i64)>,
+    /// The most reference events waiting in the matcher at once.
+    pub peak_waiting: usize,
+    /// The most records of the reference held at once by the comparison besides its samples
+    /// (events waiting in the matcher, synchronised moves and phases, key points waiting for
+    /// their pair; each one's most, summed): a figure for the memory bound.
+    pub records_held: usize,
     handshake: super::handshake::Handshake,
     ref_handshake: Vec<super::handshake::Fault>,
 }
@@ -170,7 +191,8 @@ impl<'r, 'a> Comparator<'r, 'a> {
         let ref_anchor = match &anchor {
             Anchor::Offset(_) => None,
             Anchor::TapMotion | Anchor::SpindleStart => watch.and_then(|(w, th)| r.first_change(w, th)),
-            a => skeleton.events.iter().find(|e| matches_anchor(a, &e.event)).map(|e| e.t_us as i64),
+            Anchor::Function(l, c) => r.summary.first(&Key::Function(*l, *c)),
+            Anchor::Edge(s, v) => r.summary.first(&Key::Edge(*s, *v)),
         };
         let offset = match anchor {
             Anchor::Offset(o) => Some(o),
@@ -189,9 +211,14 @@ impl<'r, 'a> Comparator<'r, 'a> {
             anchor,
             offset,
             pending: Vec::new(),
-            matcher: Some(Matcher::new(skeleton)),
+            matcher: Some(if r.streamed { Matcher::streaming(true, true) } else { Matcher::new(skeleton) }),
+            wmax: 0,
             matched: 0,
             keys: KeyTracker::new(r.tap),
+            keycmp: KeyCompare::default(),
+            unattributed: Vec::new(),
+            absent_refs: Vec::new(),
+            sync_notes_at: None,
             findings: Vec::new(),
             sig: Signals::default(),
             sync_win: None,
@@ -236,22 +263,28 @@ impl<'r, 'a> Comparator<'r, 'a> {
             last_sample_t: None,
             motion,
             marks: Vec::new(),
+            peak_waiting: 0,
+            records_held: 0,
             handshake: Default::default(),
-            ref_handshake: super::handshake::faults_of(skeleton),
+            ref_handshake: r.summary.faults.clone(),
         }
+        .widest_window()
+        .reference_keys()
     }
 
     /// Compares only what `carried` says the recording can show; the reference events it
     /// cannot (functions, alarms) are counted as not comparable.
     pub fn carrying(mut self, carried: Carried, skeleton: &Trace) -> Self {
-        let keep = |k: &Key| match k {
-            Key::Function(..) => carried.functions,
-            Key::Alarm(_) => carried.alarms,
-            Key::Edge(..) => true,
-        };
+        let (f, a) = (carried.functions, carried.alarms);
         self.matcher = None; // one matcher in memory at a time
-        self.matcher = Some(Matcher::new_filtered(skeleton, keep));
-        self.not_comparable = super::carried::left_out(self.r, skeleton, &carried);
+        self.matcher = Some(if self.r.streamed {
+            Matcher::streaming(f, a)
+        } else {
+            Matcher::new_filtered(skeleton, f, a)
+        });
+        let (notes, at) = super::carried::left_out(self.r, &carried);
+        self.not_comparable = notes;
+        self.sync_notes_at = at;
         self.env_slots = self.r.axes().iter().map(|a| a.index).filter(|&k| carried.axis(k)).collect();
         self.carried = carried;
         self
@@ -280,20 +313,22 @@ impl<'r, 'a> Comparator<'r, 'a> {
             sync_rule: self
                 .r
                 .sync_index(t)
-                .and_then(|k| super::tolerance::sync_rule(&self.dialect, self.r.sync[k].code)),
+                .and_then(|k| super::tolerance::sync_rule(&self.dialect, self.r.sync_window(k).code)),
             in_sync: self.r.sync_index(t).is_some(),
         }
     }
 
-    /// Adds a divergence (the first [`MAX_DIVERGENCES`] are kept).
-    pub fn push(&mut self, d: Divergence) {
+    /// Adds a divergence (the first [`MAX_DIVERGENCES`] are kept); its index when kept.
+    pub fn push(&mut self, d: Divergence) -> Option<usize> {
         let n = self.per_check.entry(d.check.clone()).or_insert(0);
         *n += 1;
         if self.divergences.len() < MAX_DIVERGENCES && *n <= super::MAX_PER_CHECK {
             self.divergences.push(d);
+            Some(self.divergences.len() - 1)
         } else {
             self.omitted += 1;
             *self.omitted_by_check.entry(d.check).or_insert(0) += 1;
+            None
         }
     }
 
@@ -309,16 +344,17 @@ impl<'r, 'a> Comparator<'r, 'a> {
         a: String,
         m: String,
     ) {
-        let rule = attribute(topic, &self.context(t));
-        self.push(Divergence {
-            rule,
+        let rule = self.attribute_now(topic, t);
+        let d = Divergence {
+            rule: String::new(),
             check: check.into(),
             what,
             t_us: Some(t),
             expected: e,
             actual: a,
             margin: m,
-        });
+        };
+        self.push_attributed(d, rule, topic, false);
     }
 
     /// One recorded event, time as recorded.
@@ -387,6 +423,11 @@ impl<'r, 'a> Comparator<'r, 'a> {
             Event::Sample(s) => {
                 self.samples_seen += 1;
                 self.r.forget_before(t - self.floor_us);
+                if self.samples_seen.is_multiple_of(128) {
+                    // What the replay alongside sent with the samples, taken now and then
+                    // (memory; the matcher takes what it needs before each recorded event).
+                    self.take_reference_events(None);
+                }
                 if t >= 0 && t <= self.r.end_us {
                     if let Some(p) = self.last_sample_t {
                         self.max_gap_us = self.max_gap_us.max(t - p);
@@ -422,6 +463,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
                 self.handshake.edge(t, *signal, *value, &mut faults);
                 super::handshake::report(self, faults);
                 self.keys.event(t, &ev.event);
+                self.take_recorded_keys();
                 self.discrete(t, ev);
             }
             Event::Function { .. } => {
@@ -493,6 +535,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
     fn discrete(&mut self, t: i64, ev: &TraceEvent) {
         self.keep(t, ev);
         let Some(key) = Key::of(&ev.event) else { return };
+        self.take_reference_events(Some(t));
         if let Some(m) = &mut self.matcher {
             m.record(key, t, &self.tol, &mut self.findings);
         }
@@ -583,8 +626,9 @@ impl<'r, 'a> Comparator<'r, 'a> {
     }
 
     /// Ends the stream: open runs are closed, unmatched reference events reported, key points
-    /// and the final state compared. Returns the compact recorded trace.
-    pub fn finish(&mut self) -> (Trace, super::keypoints::KeyPoints) {
+    /// and the final state compared. Returns the compact recorded trace and the pecks of the
+    /// reference and of the recording.
+    pub fn finish(&mut self) -> (Trace, (usize, usize)) {
         if self.offset.is_none() {
             self.give_up_anchor();
             for p in std::mem::take(&mut self.pending) {
@@ -599,22 +643,43 @@ impl<'r, 'a> Comparator<'r, 'a> {
         for k in 0..self.env_runs.len() {
             self.close_env(k);
         }
+        if self.r.streamed {
+            // The rest of the reference's events; its samples only as far as the end's check
+            // looks (the final speed, ± the event window around the last recorded sample).
+            let last = self.last_sample.map_or(i64::MIN, |x| x.0);
+            self.r.win.borrow_mut().drain(last.saturating_add(ms_us(self.tol.event_ms)));
+            self.take_reference_events(None);
+        }
         if let Some(m) = self.matcher.take() {
             self.matched = m.matched;
+            self.peak_waiting = m.peak_waiting;
             self.marks = m.marks();
             m.finish(&mut self.findings);
         }
         self.flush_findings();
         super::shift::resolve(self);
         super::carried::judge_missing_edges(self);
-        let keys = std::mem::replace(&mut self.keys, KeyTracker::new(None)).finish();
+        let mut keys = std::mem::replace(&mut self.keys, KeyTracker::new(None)).finish();
+        self.add_keys(1, &mut keys);
+        if self.r.streamed {
+            self.keycmp.ref_reversals = self.r.win.borrow().reversals.unwrap_or(0);
+        }
+        if let Some(at) = self.sync_notes_at.take() {
+            let count = self.r.win.borrow().moves_count;
+            let notes = super::carried::sync_notes(self.r, &self.carried, count.0, |slot| count.1[slot]);
+            let at = at.min(self.not_comparable.len());
+            self.not_comparable.splice(at..at, notes);
+        }
+        let pecks = self.keycmp.pecks();
+        self.records_held = self.peak_waiting + self.keycmp.peak + self.r.win.borrow().held_peak;
         if super::carried::key_points_comparable(self) {
-            super::keypoints_cmp::compare(self, &keys);
+            std::mem::take(&mut self.keycmp).finish(self, keys.reversals);
         }
         if self.carried.rpm {
             self.end_state();
         }
-        (self.compact_trace(), keys)
+        self.attribute_late();
+        (self.compact_trace(), pecks)
     }
 
     fn end_state(&mut self) {

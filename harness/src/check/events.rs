@@ -7,7 +7,7 @@
 //! missing, recorded ones without a partner extra. An event matched with a reference event that
 //! comes strictly earlier than the one matched before it is out of order.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 
 use nc_engine::trace::{Event, Signal, Trace};
 
@@ -82,8 +82,9 @@ pub enum Finding {
 
 #[derive(Debug, Default)]
 struct Queue {
-    refs: Vec<(i64, usize)>,
-    next: usize,
+    /// The reference occurrences not yet matched or skipped, in time order: (time, index among
+    /// the reference's events).
+    refs: VecDeque<(i64, usize)>,
     /// Its index in [`Matcher::names`].
     id: u32,
 }
@@ -92,57 +93,105 @@ struct Queue {
 const LOOK_AHEAD: usize = 4;
 
 /// Matches recorded discrete events against the reference's.
+///
+/// The reference's events are given one by one ([`Matcher::reference`]), all before the first
+/// recorded one or as the comparison advances: a recorded event at `t` is matched as against
+/// every reference event once those up to `t` + its window are given (a candidate later than
+/// that is outside the window, and the next occurrence is then too far ahead either way).
+/// Matched and skipped occurrences are dropped: memory follows the events given and not yet
+/// matched, not the run.
 #[derive(Debug)]
 pub struct Matcher {
     queues: BTreeMap<Key, Queue>,
     /// The distinct keys, by first occurrence.
     names: Vec<Key>,
-    /// Each reference event's key, an index into `names` (memory: one word per event, not a
-    /// whole key; a run has few distinct keys).
-    keys: Vec<u32>,
-    ref_t: Vec<i64>,
-    rec_t: Vec<Option<i64>>,
-    last: Option<(usize, i64)>,
+    /// The reference's times and the matched recorded times, by reference event (kept only for
+    /// [`Matcher::marks`]).
+    marks: Option<(Vec<i64>, Vec<Option<i64>>)>,
+    /// The last event matched: its index, reference time and key (an index into `names`).
+    last: Option<(usize, i64, u32)>,
+    functions: bool,
+    alarms: bool,
+    /// Reference occurrences given and not yet matched or skipped, and the most at once.
+    waiting: usize,
+    /// The most reference occurrences waiting at once (a figure for the memory bound).
+    pub peak_waiting: usize,
     /// Events matched.
     pub matched: usize,
-    /// Reference discrete events.
+    /// Reference discrete events given.
     pub total: usize,
 }
 
 impl Matcher {
     /// A matcher over the reference's discrete events.
     pub fn new(reference: &Trace) -> Matcher {
-        Matcher::new_filtered(reference, |_| true)
+        Matcher::new_filtered(reference, true, true)
     }
 
-    /// A matcher over the reference's discrete events that `keep` accepts (those a recording
-    /// can carry).
-    pub fn new_filtered(reference: &Trace, keep: impl Fn(&Key) -> bool) -> Matcher {
-        let mut queues: BTreeMap<Key, Queue> = BTreeMap::new();
-        let mut names = Vec::new();
-        let mut keys = Vec::new();
-        let mut ref_t = Vec::new();
+    /// A matcher over the reference's discrete events, functions and alarms only when the
+    /// recording can carry them; [`Matcher::marks`] kept.
+    pub fn new_filtered(reference: &Trace, functions: bool, alarms: bool) -> Matcher {
+        let mut m = Matcher::streaming(functions, alarms);
+        m.marks = Some((Vec::new(), Vec::new()));
         for e in &reference.events {
-            if let Some(k) = Key::of(&e.event).filter(|k| keep(k)) {
-                let q = queues.entry(k).or_insert_with_key(|k| {
-                    names.push(k.clone());
-                    Queue { id: (names.len() - 1) as u32, ..Queue::default() }
-                });
-                q.refs.push((e.t_us as i64, keys.len()));
-                keys.push(q.id);
-                ref_t.push(e.t_us as i64);
+            if let Some(k) = Key::of(&e.event) {
+                m.reference(k, e.t_us as i64);
             }
         }
-        keys.shrink_to_fit();
-        ref_t.shrink_to_fit();
-        let total = keys.len();
-        let rec_t = vec![None; total];
-        Matcher { queues, names, keys, ref_t, rec_t, last: None, matched: 0, total }
+        if let Some((r, q)) = &mut m.marks {
+            r.shrink_to_fit();
+            q.shrink_to_fit();
+        }
+        m
     }
 
-    /// The matched events so far: (reference time, recorded time), in the reference's order.
+    /// A matcher given no reference event yet (functions and alarms only when the recording can
+    /// carry them), no [`Matcher::marks`] kept.
+    pub fn streaming(functions: bool, alarms: bool) -> Matcher {
+        Matcher {
+            queues: BTreeMap::new(),
+            names: Vec::new(),
+            marks: None,
+            last: None,
+            functions,
+            alarms,
+            waiting: 0,
+            peak_waiting: 0,
+            matched: 0,
+            total: 0,
+        }
+    }
+
+    /// The next reference event (in the reference's order), key `k` at `t`.
+    pub fn reference(&mut self, k: Key, t: i64) {
+        let keep = match k {
+            Key::Function(..) => self.functions,
+            Key::Alarm(_) => self.alarms,
+            Key::Edge(..) => true,
+        };
+        if !keep {
+            return;
+        }
+        let names = &mut self.names;
+        let q = self.queues.entry(k).or_insert_with_key(|k| {
+            names.push(k.clone());
+            Queue { id: (names.len() - 1) as u32, ..Queue::default() }
+        });
+        q.refs.push_back((t, self.total));
+        if let Some((r, q)) = &mut self.marks {
+            r.push(t);
+            q.push(None);
+        }
+        self.total += 1;
+        self.waiting += 1;
+        self.peak_waiting = self.peak_waiting.max(self.waiting);
+    }
+
+    /// The matched events so far: (reference time, recorded time), in the reference's order
+    /// (none when the matcher keeps no marks).
     pub fn marks(&self) -> Vec<(i64, i64)> {
-        self.ref_t.iter().zip(&self.rec_t).filter_map(|(&r, q)| q.map(|q| (r, q))).collect()
+        let Some((r, q)) = &self.marks else { return Vec::new() };
+        r.iter().zip(q).filter_map(|(&r, q)| q.map(|q| (r, q))).collect()
     }
 
     /// A recorded event at aligned time `t`; findings go to `out`.
@@ -152,50 +201,106 @@ impl Matcher {
             out.push(Finding::Extra(key, t));
             return;
         };
-        if q.next >= q.refs.len() {
+        let Some(&(first, _)) = q.refs.front() else {
             out.push(Finding::Extra(key, t));
             return;
-        }
-        let end = (q.next + LOOK_AHEAD).min(q.refs.len());
-        let pick = (q.next..end).find(|&k| (q.refs[k].0 - t).abs() <= w);
+        };
+        let end = LOOK_AHEAD.min(q.refs.len());
+        let pick = (0..end).find(|&k| (q.refs[k].0 - t).abs() <= w);
         let k = match pick {
             Some(k) => k,
             // Far from every candidate: extra when the next reference occurrence is still well
             // ahead, else matched late.
-            None if q.refs[q.next].0 - t > w => {
+            None if first - t > w => {
                 out.push(Finding::Extra(key, t));
                 return;
             }
-            None => q.next,
+            None => 0,
         };
-        for skipped in q.next..k {
-            out.push(Finding::Missing(key.clone(), q.refs[skipped].0));
+        for _ in 0..k {
+            if let Some((skipped, _)) = q.refs.pop_front() {
+                out.push(Finding::Missing(key.clone(), skipped));
+            }
         }
-        q.next = k + 1;
-        let (t_ref, idx) = q.refs[k];
+        let Some((t_ref, idx)) = q.refs.pop_front() else { return };
+        self.waiting -= k + 1;
+        let id = q.id;
         self.matched += 1;
-        self.rec_t[idx] = Some(t);
+        if let Some((_, q)) = &mut self.marks {
+            q[idx] = Some(t);
+        }
         if (t_ref - t).abs() > w {
             out.push(Finding::Late(key.clone(), t_ref, t, w));
         }
-        if let Some((li, lt)) = self.last {
+        if let Some((li, lt, lk)) = self.last {
             if idx < li && t_ref < lt {
-                let before = self.names[self.keys[li] as usize].clone();
+                let before = self.names[lk as usize].clone();
                 out.push(Finding::Order(key.clone(), t_ref, t, before, lt));
             }
         }
-        if self.last.is_none_or(|(li, _)| idx > li) {
-            self.last = Some((idx, t_ref));
+        if self.last.is_none_or(|(li, _, _)| idx > li) {
+            self.last = Some((idx, t_ref, id));
         }
     }
 
     /// The reference events never matched.
     pub fn finish(self, out: &mut Vec<Finding>) {
         for (k, q) in self.queues {
-            for &(t, _) in &q.refs[q.next..] {
+            for &(t, _) in &q.refs {
                 out.push(Finding::Missing(k.clone(), t));
             }
         }
+    }
+}
+
+/// The reference's discrete events as a whole, read as they stream by: what the comparison
+/// needs of them before and besides the matching (the anchor, the events a recording cannot
+/// carry, the reference's own handshake faults), so that the list itself need not be kept.
+#[derive(Debug, Default, Clone)]
+pub struct Summary {
+    /// The distinct keys in order of first occurrence: key, its first time, its count.
+    pub keys: Vec<(Key, i64, usize)>,
+    /// Discrete events (edges, functions, alarms).
+    pub total: usize,
+    /// The reference's own handshake faults ([`super::handshake::faults_of`]), complete after
+    /// [`Summary::finish`].
+    pub faults: Vec<super::handshake::Fault>,
+    handshake: super::handshake::Handshake,
+}
+
+impl Summary {
+    /// The summary of a whole trace.
+    pub fn of(trace: &Trace) -> Summary {
+        let mut s = Summary::default();
+        for e in &trace.events {
+            s.event(e.t_us as i64, &e.event);
+        }
+        s.finish();
+        s
+    }
+
+    /// The next event of the reference, at `t`.
+    pub fn event(&mut self, t: i64, ev: &Event) {
+        if let Event::Signal { signal, value } = ev {
+            self.handshake.edge(t, *signal, *value, &mut self.faults);
+        }
+        if let Some(k) = Key::of(ev) {
+            self.total += 1;
+            match self.keys.iter_mut().find(|x| x.0 == k) {
+                Some(x) => x.2 += 1,
+                None => self.keys.push((k, t, 1)),
+            }
+        }
+    }
+
+    /// The end of the reference.
+    pub fn finish(&mut self) {
+        std::mem::take(&mut self.handshake).finish(&mut self.faults);
+    }
+
+    /// The time of the first occurrence of `k` (None: none).
+    pub fn first(&self, k: &Key) -> Option<i64> {
+        self.keys.iter().find(|x| &x.0 == k).map(|x| x.1)
     }
 }
 

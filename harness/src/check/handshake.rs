@@ -21,7 +21,7 @@ pub struct Fault {
 const STROBES: [Signal; 3] = [Signal::Mf, Signal::Sf, Signal::Tf];
 
 /// Follows the edges of one trace.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub struct Handshake {
     sig: Signals,
     /// The strobes FIN has answered since they rose.

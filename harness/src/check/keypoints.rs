@@ -99,6 +99,10 @@ pub struct KeyTracker {
     /// issue 12): the cut's depth and the return level are read where the tap stops going deeper,
     /// so that a fall recorded a PLC scan late reads the same point.
     settling: bool,
+    /// Segments and returns kept so far, taken or not ([`KeyTracker::take`]): at most
+    /// [`MAX_SEGMENTS`] of each.
+    closed: usize,
+    returned: usize,
 }
 
 impl KeyTracker {
@@ -115,15 +119,34 @@ impl KeyTracker {
             return_pending: false,
             last_reversal: None,
             settling: false,
+            closed: 0,
+            returned: 0,
         }
     }
 
     fn close(&mut self) {
         if let Some(s) = self.cur.take() {
-            if self.keys.segments.len() < MAX_SEGMENTS {
+            if self.closed < MAX_SEGMENTS {
                 self.keys.segments.push(s);
+                self.closed += 1;
             }
         }
+    }
+
+    /// Moves the segments and returns read so far that will not change any more into `keys`
+    /// (its reversals are left alone: they are known at the end, [`KeyTracker::finish`]): the
+    /// key points can be compared stroke by stroke, memory does not follow the strokes.
+    pub fn take(&mut self, keys: &mut KeyPoints) {
+        keys.segments.append(&mut self.keys.segments);
+        // The last return still waits for the sample after it, or for the cut to stop.
+        let hold = usize::from(self.return_pending || self.settling).min(self.keys.returns.len());
+        let n = self.keys.returns.len() - hold;
+        keys.returns.extend(self.keys.returns.drain(..n));
+    }
+
+    /// Whether [`KeyTracker::take`] has something to give.
+    pub fn has_final(&self) -> bool {
+        !self.keys.segments.is_empty() || !self.keys.returns.is_empty()
     }
 
     /// One event at the aligned time `t`.
@@ -214,8 +237,9 @@ impl KeyTracker {
                         } else {
                             self.close();
                         }
-                        if self.keys.returns.len() < MAX_SEGMENTS {
+                        if self.returned < MAX_SEGMENTS {
                             self.keys.returns.push((t, self.last_depth, 0));
+                            self.returned += 1;
                             self.return_pending = true;
                         }
                         self.last_rpm_sign = 0;

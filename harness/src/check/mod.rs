@@ -29,6 +29,7 @@ pub mod shift;
 pub mod survey;
 mod survey_fused;
 pub mod sync;
+mod sync_stream;
 pub mod tolerance;
 pub mod window;
 
@@ -158,6 +159,10 @@ pub struct Report {
     /// Most reference samples held at once by the comparison.
     #[serde(skip)]
     pub reference_samples_held: usize,
+    /// Most other records of the reference held at once by the comparison (its events waiting
+    /// to be matched, synchronised moves, phases, key points waiting for their pair).
+    #[serde(skip)]
+    pub reference_records_held: usize,
     /// Wall time of the comparison, s (JUnit `time`).
     pub seconds: f64,
 }
@@ -222,10 +227,13 @@ pub fn check(reference: &Trace, recorded: impl IntoIterator<Item = TraceEvent>, 
     check_source(Source::Trace(reference), recorded, spec)
 }
 
-/// Compares the recorded events with the reference run `source`. A run (the engine) is replayed:
-/// twice to index it (its discrete events, tap, key points, synchronised moves), then once more
-/// on another thread, alongside the recorded stream, its samples held only around the recorded
-/// time: memory does not follow the length of the run or of the recording.
+/// Compares the recorded events with the reference run `source`. A run (the engine) is replayed
+/// once to index it (its tap, a summary of its events; with temporal rules, or thread blocks
+/// found by their lead, its discrete events, key points and synchronised moves too, in one or
+/// two passes), then once more on another thread, alongside the recorded stream: its samples,
+/// and without temporal rules its events, key points, synchronised moves and phases, held only
+/// around the recorded time (DEC-162; one more replay at the end attributes divergences at times
+/// no longer held): memory does not follow the length of the run or of the recording.
 pub fn check_source(
     source: Source,
     recorded: impl IntoIterator<Item = TraceEvent>,
@@ -242,6 +250,13 @@ pub fn check_surveyed(
     recorded: impl IntoIterator<Item = TraceEvent>,
     spec: &CheckSpec,
 ) -> Report {
+    // Thread blocks found by their lead (KND G32 without phases) are read from a whole first
+    // pass, their moves in a second (`survey::Survey`): not alongside the comparison.
+    let skeleton = if skeleton.is_lean() && skeleton.has_lead_blocks() {
+        survey::Skeleton::of_lean(source, false)
+    } else {
+        skeleton
+    };
     match source {
         Source::Trace(t) => {
             let r = reference::Reference::build_from(
@@ -254,10 +269,11 @@ pub fn check_surveyed(
         }
         Source::Run(run) => std::thread::scope(|sc| {
             let (tx, rx) = std::sync::mpsc::sync_channel(4);
+            let (keyed, tap) = (skeleton.is_lean(), skeleton.tap());
             sc.spawn(move || {
-                let mut sink = window::ChannelSink::new(tx);
+                let mut sink = window::ChannelSink::new(tx, keyed, tap);
                 run(&mut sink as &mut dyn TraceSink);
-                sink.flush();
+                sink.finish();
             });
             let r = reference::Reference::build_from(
                 source,
@@ -277,10 +293,11 @@ fn compare(
 ) -> Report {
     let started = std::time::Instant::now();
     let anchor = spec.anchor.clone().unwrap_or_else(|| spec.carried.default_anchor(&r));
-    let totals = compare_totals(&r.trace);
-    // Without temporal rules the reference's discrete events are read once, here, then dropped.
+    let totals = r.summary.total;
+    // Without temporal rules the reference's discrete events are read once, here, then dropped
+    // (when the first pass kept them: else they come with the samples).
     let keep_all = spec.expect.is_some();
-    let full = if keep_all { None } else { Some(r.slim()) };
+    let full = if keep_all || r.streamed { None } else { Some(r.slim()) };
     let skeleton = full.as_ref().unwrap_or(&r.trace);
     let mut c =
         compare::Comparator::new(&r, skeleton, spec.tolerances.clone(), anchor.clone(), spec.rules.clone())
@@ -290,7 +307,7 @@ fn compare(
     for ev in recorded {
         c.event(ev);
     }
-    let (compact, keys) = c.finish();
+    let (compact, pecks) = c.finish();
     let mut rules = Vec::new();
     if let Some(exp) = spec.expect {
         rules = expect::evaluate_discrete(exp, &compact);
@@ -328,7 +345,7 @@ fn compare(
         max_sync_error_mm: c.max_sync_nm / 1e6,
         sync_samples: c.sync_samples,
         max_envelope_excess_mm: c.max_env_nm / 1e6,
-        pecks: (r.keys.pecks().len(), keys.pecks().len()),
+        pecks,
         fit_rms_mm: (c.fit.1 > 0).then(|| (c.fit.0 / c.fit.1 as f64).sqrt() / 1e6),
         fit_values: c.fit.1,
     };
@@ -346,12 +363,9 @@ fn compare(
         series: std::mem::take(&mut c.series),
         reference: Trace { meta: r.trace.meta.clone(), events: Vec::new() },
         reference_samples_held: r.win.borrow().peak,
+        reference_records_held: c.records_held,
         seconds: started.elapsed().as_secs_f64(),
     };
     drop(c);
     Report { reference: std::mem::replace(&mut r.trace, report.reference.clone()), ..report }
-}
-
-fn compare_totals(reference: &Trace) -> usize {
-    reference.events.iter().filter(|e| events::Key::of(&e.event).is_some()).count()
 }

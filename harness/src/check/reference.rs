@@ -56,8 +56,18 @@ pub struct Reference<'a> {
     pub spindle_turns: bool,
     /// Each axis moves at some sample.
     pub moves: [bool; AXES],
-    /// [`Reference::slim`] dropped the discrete events.
+    /// [`Reference::slim`] dropped the discrete events (or the first pass kept none).
     pub slimmed: bool,
+    /// The first pass kept no discrete events: the comparison takes them, the key points, the
+    /// synchronised moves and the phases from the samples' feed ([`Window::keyed`]) as it
+    /// advances ([`Reference::sync`] and [`Reference::phases`] are empty).
+    pub streamed: bool,
+    /// The first overload retract's time.
+    pub first_overload: Option<i64>,
+    /// The reference cuts (a `cutting` phase) at some time.
+    pub cuts: bool,
+    /// What the comparison needs of the discrete events as a whole.
+    pub summary: super::events::Summary,
     /// The envelope's sliding extremes.
     extremes: RefCell<Extremes>,
     /// The index in `sync` of the last [`Reference::sync_index`] (where the next one looks
@@ -162,7 +172,9 @@ pub struct Extremes {
 impl Extremes {
     /// Moves the window to [g0, g1) over the samples of `w` for the axes `slots`.
     fn slide(&mut self, w: &Window, g0: usize, g1: usize, slots: &[usize]) {
-        if g0 < self.from || g1 < self.to || g0 > self.to {
+        // (Started again, the same extremes, when the window has moved on or dropped the
+        // samples the queues begin with.)
+        if g0 < self.from || g1 < self.to || g0 > self.to || self.from < w.base {
             *self = Extremes { from: g0, to: g0, ..Extremes::default() };
         }
         let v = |g: usize, k: usize| w.s[g - w.base].axes[k];
@@ -214,6 +226,17 @@ impl TraceSink for Detectors {
     }
     fn wants_stop(&self) -> bool {
         self.d.iter().all(|x| x.2.is_some())
+    }
+}
+
+/// `moves.partition_point(|m| m.t0 <= t)`, looked for from `h` (the last answer) first: the
+/// comparison walks forward.
+fn next_move(moves: &[super::sync::Window], h: usize, t: i64) -> usize {
+    match (moves.get(h), moves.get(h + 1)) {
+        (Some(a), Some(b)) if a.t0 <= t && b.t0 > t => h + 1,
+        (Some(a), None) if a.t0 <= t => h + 1,
+        (_, Some(b)) if b.t0 <= t && moves.get(h + 2).is_none_or(|c| c.t0 > t) => h + 2,
+        _ => moves.partition_point(|w| w.t0 <= t),
     }
 }
 
@@ -294,6 +317,7 @@ impl<'a> Reference<'a> {
     pub(crate) fn build(source: Source<'a>, feed: Feed<'a>) -> Reference<'a> {
         let mut sk = Skeleton::default();
         source.replay(&mut sk);
+        sk.summary.finish();
         Reference::build_from(source, sk, feed, true)
     }
 
@@ -323,24 +347,32 @@ impl<'a> Reference<'a> {
             trace.events.shrink_to_fit();
         }
         // The second pass, read in the first when it could be; else run now (it takes the
-        // plan's intervals: the windows are built from `plan.raw`).
-        let (keys, spans, parts) = match sk.fused_survey(tap, &plan) {
-            Some((keys, spans)) => {
-                plan.spans = Vec::new();
-                (keys, spans, Vec::new())
-            }
-            None => {
-                let (spans, lead) = (std::mem::take(&mut plan.spans), std::mem::take(&mut plan.lead));
-                let mut sv = Survey::new(tap, spans, lead, &trace.meta.axes);
-                source.replay(&mut sv);
-                sv.finish()
-            }
+        // plan's intervals: the windows are built from `plan.raw`). Lean, the synchronised moves
+        // and key points are read alongside the comparison (`sync_stream`, `keypoints_cmp`).
+        let streamed = sk.is_lean();
+        debug_assert!(!(streamed && sk.has_lead_blocks()), "lead blocks are planned from a whole first pass");
+        let (keys, sync) = if streamed {
+            (KeyPoints::default(), Vec::new())
+        } else {
+            let (keys, spans, parts) = match sk.fused_survey(tap, &plan) {
+                Some((keys, spans)) => {
+                    plan.spans = Vec::new();
+                    (keys, spans, Vec::new())
+                }
+                None => {
+                    let (spans, lead) = (std::mem::take(&mut plan.spans), std::mem::take(&mut plan.lead));
+                    let mut sv = Survey::new(tap, spans, lead, &trace.meta.axes);
+                    source.replay(&mut sv);
+                    sv.finish()
+                }
+            };
+            (keys, super::sync::build(plan, spans, parts, tap, &trace.meta.axes))
         };
-        let sync = super::sync::build(plan, spans, parts, tap, &trace.meta.axes);
+        let win = Window::with_keyed(feed, streamed, tap, &trace.meta);
         Reference {
             trace,
             source,
-            win: RefCell::new(Window::new(feed)),
+            win: RefCell::new(win),
             tap,
             keys,
             end_us: sk.end_us,
@@ -351,7 +383,11 @@ impl<'a> Reference<'a> {
             last_sample_t: sk.last_sample_t,
             spindle_turns: sk.spindle_turns,
             moves: sk.moves,
-            slimmed: false,
+            slimmed: streamed,
+            streamed,
+            first_overload: sk.first_overload,
+            cuts: sk.cuts,
+            summary: std::mem::take(&mut sk.summary),
             extremes: RefCell::new(Extremes::default()),
             sync_hint: std::cell::Cell::new(0),
         }
@@ -393,9 +429,16 @@ impl<'a> Reference<'a> {
         e.1
     }
 
-    /// Nothing before `floor` will be looked up any more: the samples before it may go.
+    /// Nothing before `floor` will be looked up any more: the samples before it may go (and,
+    /// streamed, the synchronised moves and phases).
     pub fn forget_before(&self, floor: i64) {
-        self.win.borrow_mut().prune(floor);
+        let mut w = self.win.borrow_mut();
+        w.prune(floor);
+        if self.streamed && w.moves.front().is_some_and(|m| m.t1 < floor)
+            || w.phases.get(1).is_some_and(|p| p.0 <= floor)
+        {
+            w.prune_moves(floor);
+        }
     }
 
     /// The axis that travels furthest over [t0, t1] (None: none moves).
@@ -415,18 +458,39 @@ impl<'a> Reference<'a> {
         (travel[slot] > 0).then_some(slot)
     }
 
-    /// The index in [`Reference::sync`] of the synchronised move in force at `t` (None: none).
+    /// The index of the synchronised move in force at `t` (None: none), among all the run's
+    /// ([`Reference::sync_window`]).
     pub fn sync_index(&self, t: i64) -> Option<usize> {
-        // The comparison walks forward: the move of the last call, or the next one, first.
+        if self.streamed {
+            let mut w = self.win.borrow_mut();
+            w.ensure_moves(t);
+            let base = w.moves_base;
+            let h = self.sync_hint.get().saturating_sub(base);
+            // Contiguous (`window::add_moves`); else the lookup is over the first part.
+            let moves = w.moves.as_slices().0;
+            let k = next_move(moves, h, t);
+            self.sync_hint.set(base + k.saturating_sub(1));
+            return k.checked_sub(1).filter(|&i| t <= moves[i].t1).map(|i| base + i);
+        }
         let h = self.sync_hint.get();
-        let k = match (self.sync.get(h), self.sync.get(h + 1)) {
-            (Some(a), Some(b)) if a.t0 <= t && b.t0 > t => h + 1,
-            (Some(a), None) if a.t0 <= t => h + 1,
-            (_, Some(b)) if b.t0 <= t && self.sync.get(h + 2).is_none_or(|c| c.t0 > t) => h + 2,
-            _ => self.sync.partition_point(|w| w.t0 <= t),
-        };
+        let k = next_move(&self.sync, h, t);
         self.sync_hint.set(k.saturating_sub(1));
         k.checked_sub(1).filter(|&i| t <= self.sync[i].t1)
+    }
+
+    /// The synchronised move `k` of [`Reference::sync_index`].
+    pub fn sync_window(&self, k: usize) -> super::sync::Window {
+        if self.streamed {
+            let w = self.win.borrow();
+            return w.moves[k - w.moves_base];
+        }
+        self.sync[k]
+    }
+
+    /// Whether what attribution needs at `t` (the phase, the synchronised move) is still held:
+    /// streamed, those of times the comparison has passed are dropped.
+    pub fn holds_context_at(&self, t: i64) -> bool {
+        !self.streamed || t >= self.win.borrow().held_from
     }
 
     /// The axes of the trace.
@@ -598,6 +662,12 @@ impl<'a> Reference<'a> {
 
     /// The phase in force at `t`.
     pub fn phase_at(&self, t: i64) -> Phase {
+        if self.streamed {
+            let mut w = self.win.borrow_mut();
+            w.ensure(t);
+            let k = w.phases.partition_point(|p| p.0 <= t);
+            return k.checked_sub(1).map_or(Phase::Idle, |i| w.phases[i].1);
+        }
         let k = self.phases.partition_point(|p| p.0 <= t);
         k.checked_sub(1).map_or(Phase::Idle, |i| self.phases[i].1)
     }
@@ -620,7 +690,7 @@ impl<'a> Reference<'a> {
 
     /// Whether an overload retract had started by `t` (within the reference's run).
     pub fn overload_by(&self, t: i64) -> bool {
-        self.phases.iter().any(|(tp, p)| *p == Phase::OverloadRetract && *tp <= t)
+        self.first_overload.is_some_and(|tp| tp <= t)
     }
 }
 

@@ -1,7 +1,9 @@
 //! The passes over the reference run that index it without keeping its samples: the first keeps
-//! its discrete events (the "skeleton") and finds the tap; the second, knowing the tap, reads its
-//! key points and the figures of its synchronised moves (`check::sync`). The comparison then
-//! reads the samples a third time through a sliding [`super::window::Window`].
+//! its discrete events (the "skeleton"; lean, a summary of them only) and finds the tap; the
+//! second, knowing the tap, reads its key points and the figures of its synchronised moves
+//! (`check::sync`; read in the first when it can be, `survey_fused`; lean, alongside the
+//! comparison, `check::sync_stream`). The comparison then reads the samples again through a
+//! sliding [`super::window::Window`].
 //!
 //! A [`Source`] is a reference run that can be replayed as often as needed: a trace in memory,
 //! or the engine run again (it is deterministic), through the engine's public API.
@@ -45,8 +47,10 @@ impl Source<'_> {
 pub struct Skeleton {
     /// The header.
     pub meta: Option<TraceMeta>,
-    /// Every event but the samples.
+    /// Every event but the samples (lean: the end only).
     pub events: Vec<TraceEvent>,
+    /// What the comparison needs of the discrete events as a whole (complete at the end).
+    pub summary: super::events::Summary,
     /// Every event, samples included.
     pub total: usize,
     /// The time of the last event.
@@ -57,12 +61,18 @@ pub struct Skeleton {
     pub spindle_turns: bool,
     /// Each axis is somewhere else than at the first sample at some sample.
     pub moves: [bool; AXES],
-    /// The phases by time.
+    /// The phases by time (lean: none, the comparison reads them alongside).
     pub phases: Vec<(i64, Phase)>,
+    /// The first overload retract's time.
+    pub first_overload: Option<i64>,
+    /// The reference cuts (a `cutting` phase) at some time.
+    pub cuts: bool,
     /// The inputs by time (name, value).
     pub inputs: Vec<(i64, String, String)>,
-    /// Phases, blocks and inputs are not kept in `events` (only the scenario's temporal rules
-    /// need them there; the phases and inputs are in their own lists, the blocks were planned).
+    /// Only the end is kept in `events` (only the scenario's temporal rules need the phases,
+    /// blocks and inputs there, which are in their own lists or planned; the edges, functions and
+    /// alarms are summed up in `summary` and given to the comparison again by the replay
+    /// alongside).
     lean: bool,
     planner: Option<super::sync::Planner>,
     first: Option<Sample>,
@@ -77,6 +87,10 @@ impl TraceSink for Skeleton {
         let mut planner = super::sync::Planner::new(meta.dialect);
         if self.fused.is_some() {
             planner.edges = Some(Vec::new());
+        }
+        if self.lean {
+            // The moves are read alongside the comparison: only whether there are lead blocks.
+            planner = planner.without_list();
         }
         self.planner = Some(planner);
     }
@@ -104,9 +118,18 @@ impl TraceSink for Skeleton {
                 }
             }
             e => {
+                self.summary.event(ev.t_us as i64, e);
                 match e {
                     Event::Signal { signal, value } => self.tap.signal(*signal, *value),
-                    Event::Phase(p) => self.phases.push((ev.t_us as i64, *p)),
+                    Event::Phase(p) => {
+                        if *p == Phase::OverloadRetract {
+                            self.first_overload.get_or_insert(ev.t_us as i64);
+                        }
+                        self.cuts |= *p == Phase::Cutting;
+                        if !self.lean {
+                            self.phases.push((ev.t_us as i64, *p));
+                        }
+                    }
                     Event::Input { name, value } => {
                         self.inputs.push((ev.t_us as i64, name.clone(), value.clone()))
                     }
@@ -124,7 +147,7 @@ impl TraceSink for Skeleton {
                         e.clear();
                     }
                 }
-                if !(self.lean && matches!(e, Event::Phase(_) | Event::Block { .. } | Event::Input { .. })) {
+                if !self.lean || matches!(e, Event::End(_)) {
                     self.events.push(ev.clone());
                 }
             }
@@ -135,20 +158,27 @@ impl TraceSink for Skeleton {
 impl Skeleton {
     /// The first pass over `source`.
     pub fn of(source: Source) -> Skeleton {
-        let mut sk = Skeleton { fused: Some(Box::default()), ..Skeleton::default() };
-        source.replay(&mut sk);
-        sk
+        Skeleton::of_lean(source, false)
     }
 
-    /// [`Skeleton::of`], without keeping the phases, blocks and inputs among [`Skeleton::events`]
-    /// when `lean` (a comparison without temporal rules: memory, about half the events).
+    /// [`Skeleton::of`], keeping only the end among [`Skeleton::events`] when `lean` (a
+    /// comparison without temporal rules: memory does not follow the number of events).
     pub fn of_lean(source: Source, lean: bool) -> Skeleton {
-        let mut sk = Skeleton { lean, fused: Some(Box::default()), ..Skeleton::default() };
+        // A lean pass reads no key points and no spans (the comparison reads them alongside).
+        let fused = (!lean).then(Box::default);
+        let mut sk = Skeleton { lean, fused, ..Skeleton::default() };
         source.replay(&mut sk);
+        sk.summary.finish();
         sk
     }
 
-    /// Whether phases, blocks and inputs were left out of [`Skeleton::events`].
+    /// Whether the run has thread blocks found by their lead (KND G32 without phases): their
+    /// moves are not read alongside the comparison.
+    pub fn has_lead_blocks(&self) -> bool {
+        self.planner.as_ref().is_some_and(|p| p.has_lead_blocks())
+    }
+
+    /// Whether only the end was kept in [`Skeleton::events`].
     pub fn is_lean(&self) -> bool {
         self.lean
     }
@@ -183,7 +213,8 @@ impl Skeleton {
     /// What the second pass ([`Survey`]) would give for `plan` (the key points and the plan's
     /// spans), read in this one; `None` when it could not be (the tap guessed from the first
     /// stroke was not the run's, the plan has lead blocks, or too many events came before the
-    /// first stroke): the second pass is then needed.
+    /// first stroke): the second pass is then needed. A lean pass reads neither (the comparison
+    /// reads them alongside): `None`.
     pub fn fused_survey(
         &mut self,
         tap: Option<Tap>,
@@ -374,7 +405,7 @@ pub struct Survey {
 
 /// `v0 + (v1 − v0) · f` at `t` between the samples `p` (at or before `t`) and `n`, as
 /// `Reference::value_at`.
-fn interp(p: &(i64, Sample), n: (i64, &Sample), t: i64) -> [f64; AXES] {
+pub(super) fn interp(p: &(i64, Sample), n: (i64, &Sample), t: i64) -> [f64; AXES] {
     let f = (t - p.0) as f64 / (n.0 - p.0).max(1) as f64;
     let mut out = [0.0; AXES];
     for (k, o) in out.iter_mut().enumerate() {

@@ -168,7 +168,7 @@ mod tests {
         let m = Machine::new(dialect).unwrap();
         let p = m.parse(text).unwrap();
         let run = |sink: &mut dyn nc_engine::trace::TraceSink| m.run(&p, &RunOptions::default(), sink);
-        let mut sk = Skeleton::of_lean(Source::Run(&run), true);
+        let mut sk = Skeleton::of(Source::Run(&run));
         let tap = sk.tap();
         let plan = sk.plan();
         let axes = sk.meta.as_ref().unwrap().axes.clone();

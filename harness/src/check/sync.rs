@@ -193,17 +193,25 @@ pub struct Planner {
     /// The fixed intervals' openings and closings as they are read (`Some`: listed), for a
     /// survey read in the same pass (`survey_fused`).
     pub(crate) edges: Option<Vec<SpanEdge>>,
+    /// The fixed intervals are listed in the plan.
+    keep_raw: bool,
 }
 
 /// A fixed interval of the plan opened (`open`) or closed at `t`: `which` 0 a rigid stroke, 1 a
-/// phase's synchronised move (at most one of each is open at once). The closings come in the
-/// order of [`Plan::spans`].
+/// phase's synchronised move (at most one of each is open at once), its kind. The closings come
+/// in the order of [`Plan::spans`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct SpanEdge {
     pub which: usize,
     pub open: bool,
     pub t: i64,
+    pub kind: MoveKind,
 }
+
+/// A synchronised move's kind, whether it starts at a set angle, its G code.
+pub(crate) type MoveKind = (Kind, bool, Option<&'static str>);
+
+const STROKE: MoveKind = (Kind::Stroke, false, None);
 
 impl Default for Planner {
     fn default() -> Self {
@@ -232,13 +240,35 @@ impl Planner {
             feed: None,
             batch: (i64::MIN, Vec::new()),
             edges: None,
+            keep_raw: true,
         }
     }
 
-    fn edge(&mut self, which: usize, open: bool, t: i64) {
+    fn edge(&mut self, which: usize, open: bool, t: i64, kind: MoveKind) {
         if let Some(e) = &mut self.edges {
-            e.push(SpanEdge { which, open, t });
+            e.push(SpanEdge { which, open, t, kind });
         }
+    }
+
+    /// A fixed interval closed (listed unless the planner only finds whether there are lead
+    /// blocks).
+    fn fixed(&mut self, a: i64, b: i64, kind: MoveKind) {
+        if self.keep_raw {
+            self.raw.push(Raw::Fixed(a, b, kind.0, kind.1, kind.2));
+        }
+    }
+
+    /// Lists no fixed interval (memory: the synchronised moves are then read alongside the
+    /// comparison, `check::sync_stream`), only the lead blocks.
+    pub(crate) fn without_list(mut self) -> Planner {
+        self.keep_raw = false;
+        self
+    }
+
+    /// Whether a thread block without phase events was read (its moves are found by their
+    /// lead: `Survey`).
+    pub(crate) fn has_lead_blocks(&self) -> bool {
+        !self.lead.is_empty() || (self.block.is_some() && !self.phased)
     }
 
     fn by_lead(&mut self, t0: i64, t1: i64, g: &'static str, f: f64) {
@@ -256,12 +286,12 @@ impl Planner {
                 match (on, self.stroke_from) {
                     (true, None) => {
                         self.stroke_from = Some(t);
-                        self.edge(0, true, t);
+                        self.edge(0, true, t, STROKE);
                     }
                     (false, Some(a)) => {
-                        self.raw.push(Raw::Fixed(a, t, Kind::Stroke, false, None));
+                        self.fixed(a, t, STROKE);
                         self.stroke_from = None;
-                        self.edge(0, false, t);
+                        self.edge(0, false, t, STROKE);
                     }
                     _ => {}
                 }
@@ -295,15 +325,15 @@ impl Planner {
                 if self.open.is_some_and(|(_, k, ..)| k == Kind::Follow) =>
             {
                 if let Some((a, k, l, g)) = self.open.take() {
-                    self.raw.push(Raw::Fixed(a, t, k, l, g));
-                    self.edge(1, false, t);
+                    self.fixed(a, t, (k, l, g));
+                    self.edge(1, false, t, (k, l, g));
                 }
             }
             Event::Phase(p) => {
                 self.phased = true;
                 if let Some((a, k, l, g)) = self.open.take() {
-                    self.raw.push(Raw::Fixed(a, t, k, l, g));
-                    self.edge(1, false, t);
+                    self.fixed(a, t, (k, l, g));
+                    self.edge(1, false, t, (k, l, g));
                 }
                 let mut c = self.code.as_deref().unwrap_or("");
                 // A phase of a synchronised move read within a structure whose last line is
@@ -330,8 +360,8 @@ impl Planner {
                     None
                 };
                 self.open = kind.map(|(k, l)| (t, k, l, g));
-                if self.open.is_some() {
-                    self.edge(1, true, t);
+                if let Some((k, l)) = kind {
+                    self.edge(1, true, t, (k, l, g));
                 }
             }
             _ => {}
@@ -503,6 +533,23 @@ pub fn cumulative_angle(r_t: &[i64], r_s: &[nc_engine::trace::Sample]) -> Vec<f6
     out
 }
 
+/// Programs with synchronised moves of every kind (for the tests).
+#[cfg(test)]
+pub(crate) fn test_programs() -> Vec<(&'static str, String)> {
+    vec![
+        ("knd-lathe", "G00 X30 Z5;\nM03 S600;\nG32 Z-20 F2;\nG00 X40;\nZ5;\nG92 X28 Z-20 F2;\nX27;\nM30;\n".into()),
+        ("gsk-lathe", "G0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\nG0 X60;\nM30;\n".into()),
+        ("linuxcnc", "G18 G21 M3 S600\nG4 P0.5\nG0 X10 Z5\nG33 Z-20 K1.5\nG0 X12\nM2\n".into()),
+        ("linuxcnc", "G21 G90 G0 X0 Y0 Z5\nM3 S500\nG33.1 Z-10 K1.25\nG0 Z20\nM2\n".into()),
+        (
+            "linuxcnc",
+            "G21 G90 M3 S500\nG0 X0 Y0 Z3\nG91\no100 repeat [3]\n  G33.1 Z-8 K1.25\n  G0 X12 Y4\no100 endrepeat\nM2\n"
+                .into(),
+        ),
+        ("fanuc-mill", crate::check::holes::program(3)),
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -579,49 +626,38 @@ mod tests {
         assert_eq!(ends[1], m3);
     }
 
-    /// The first pass plans as it reads: a lean skeleton (no phases, blocks or inputs kept) gives
-    /// the same plan, phases and inputs as the whole one and as `plan` over the whole one's
+    /// The first pass plans as it reads: the plan of a whole first pass is `plan` over its
     /// events, for thread blocks found by their lead (KND), thread passes by phase (GSK G92.3,
-    /// LinuxCNC G33) and rigid strokes (Fanuc).
+    /// LinuxCNC G33) and rigid strokes (Fanuc); a lean pass keeps the end only, its summary of
+    /// the edges, functions and alarms the whole trace's (the moves and phases are read
+    /// alongside the comparison: `sync_stream::tests`).
     #[test]
-    fn a_lean_first_pass_plans_as_the_whole_one() {
+    fn the_first_pass_plans_as_it_reads() {
         use crate::check::survey::{Skeleton, Source};
         use nc_engine::{Machine, RunOptions};
-        let programs = [
-            (
-                "knd-lathe",
-                "G00 X30 Z5;\nM03 S600;\nG32 Z-20 F2;\nG00 X40;\nZ5;\nG92 X28 Z-20 F2;\nX27;\nM30;\n",
-            ),
-            ("gsk-lathe", "G0 X40 Z5;\nM03 S500;\nG92.3 X36 Z-20 F4 J1 K2 D0.1 E1 Q0.5 A1;\nG0 X60;\nM30;\n"),
-            ("linuxcnc", "G18 G21 M3 S600\nG4 P0.5\nG0 X10 Z5\nG33 Z-20 K1.5\nG0 X12\nM2\n"),
-            ("fanuc-mill", &crate::check::holes::program(3)),
-        ];
-        for (dialect, text) in programs {
+        for (dialect, text) in test_programs() {
             let m = Machine::new(dialect).unwrap();
-            let p = m.parse(text).unwrap();
+            let p = m.parse(&text).unwrap();
             let run = |sink: &mut dyn nc_engine::trace::TraceSink| m.run(&p, &RunOptions::default(), sink);
             let mut whole = Skeleton::of(Source::Run(&run));
             let mut lean = Skeleton::of_lean(Source::Run(&run), true);
-            let (pw, pl) = (whole.plan(), lean.plan());
+            let pw = whole.plan();
             let trace = whole.trace();
             let pt = plan(&trace, whole.end_us);
             assert!(!pw.raw.is_empty(), "{dialect}: no synchronised move planned");
-            for q in [&pl, &pt] {
-                assert_eq!(
-                    format!("{:?} {:?} {:?}", pw.raw, pw.spans, pw.lead),
-                    format!("{:?} {:?} {:?}", q.raw, q.spans, q.lead),
-                    "{dialect}"
-                );
-            }
-            assert_eq!(whole.phases, lean.phases, "{dialect}");
-            assert_eq!(whole.inputs, lean.inputs, "{dialect}");
-            let kept: Vec<_> = trace
-                .events
-                .iter()
-                .filter(|e| !matches!(e.event, Event::Phase(_) | Event::Block { .. } | Event::Input { .. }))
-                .cloned()
-                .collect();
-            assert_eq!(kept, lean.trace().events, "{dialect}");
+            assert_eq!(
+                format!("{:?} {:?} {:?}", pw.raw, pw.spans, pw.lead),
+                format!("{:?} {:?} {:?}", pt.raw, pt.spans, pt.lead),
+                "{dialect}"
+            );
+            assert_eq!(lean.has_lead_blocks(), !pw.lead.is_empty(), "{dialect}");
+            let whole_summary = crate::check::events::Summary::of(&trace);
+            assert_eq!(
+                format!("{:?} {} {:?}", whole_summary.keys, whole_summary.total, whole_summary.faults),
+                format!("{:?} {} {:?}", lean.summary.keys, lean.summary.total, lean.summary.faults),
+                "{dialect}"
+            );
+            assert_eq!(lean.trace().events, trace.events[trace.events.len() - 1..], "{dialect}");
         }
     }
 }

@@ -17,7 +17,7 @@ impl Comparator<'_, '_> {
             self.cur_sync = None;
             return;
         };
-        let w = r.sync[k];
+        let w = r.sync_window(k);
         if !self.carried.angle || !self.carried.axis(w.slot) {
             return;
         }
@@ -151,18 +151,23 @@ impl Comparator<'_, '_> {
             let letter = self.r.axes()[k].letter;
             // Attributed where the run starts, but an overload retract begun by its worst point
             // counts: a late retract strays before the reference's retract phase begins.
-            let mut ctx = self.context(run.t_first);
-            ctx.overload |= self.r.overload_by(run.t_worst);
-            let rule = attribute(Topic::Envelope, &ctx);
-            self.push(Divergence {
-                rule,
+            // (A run that began before the moves and phases held is attributed at the end.)
+            let overload = self.r.overload_by(run.t_worst);
+            let rule = self.r.holds_context_at(run.t_first).then(|| {
+                let mut ctx = self.context(run.t_first);
+                ctx.overload |= overload;
+                attribute(Topic::Envelope, &ctx)
+            });
+            let d = Divergence {
+                rule: String::new(),
                 check: "CHK-ENV-01".into(),
                 what: format!("{letter} position envelope ({} samples)", run.samples),
                 t_us: Some(run.t_first),
                 expected: run.expected,
                 actual: run.actual,
                 margin: format!("{} mm", fixed(run.excess.round() as i64, 6)),
-            });
+            };
+            self.push_attributed(d, rule, Topic::Envelope, overload);
         }
     }
 }
