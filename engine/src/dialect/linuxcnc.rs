@@ -36,6 +36,7 @@ static AXES: [AxisSpec; 3] = [
 /// Parameters of `linuxcnc`: the project's shared `nc.*` / `plc.*` model (LinuxCNC's INI
 /// settings have no numbers; DEC-80).
 pub static PARAMS: &[ParamDef] = &[
+    num("nc.trajectory_planner", "LinuxCNC trajectory planner", Int, 209.0, 210.0, 210.0, "", "Which LinuxCNC's G64 planner the motion follows (DEC-163): 210, LinuxCNC 2.10 (after #4220: a move that blends with none runs at its full acceleration); 209, LinuxCNC 2.9 (tc.c tcGetOverallMaxAccel: a G64 move whose end stays parabolic, i.e. no move follows it in the planner's queue, runs at half its acceleration)."),
     num("nc.rigid_overshoot_pitches", "G33.1 overshoot allowance", Real, 0.1, 100.0, 10.0, "pitches", "How far past the end point the G33.1 tap may follow the reversing spindle, in pitches (LinuxCNC: 10); beyond: NC-1097."),
     ParamDef { doc: "Servo period: 1000, 2000, 4000 or 8000 (LinuxCNC SERVO_PERIOD).", ..PERIOD_US },
     ParamDef { doc: "Rapid rate per axis (MAX_VELOCITY).", ..RAPID_MM_MIN },
@@ -82,6 +83,7 @@ impl Dialect for Linuxcnc {
         // another line, and only the commands of moves carry a line (LCNC-INP-01, L-121).
         c.step_stops_before_motion = true;
         c.index_latency_periods = 1;
+        c.parabolic_half_accel = p.get("nc.trajectory_planner") < 209.5;
         c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {

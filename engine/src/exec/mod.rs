@@ -11,6 +11,7 @@ mod css;
 mod follow;
 mod inputs;
 pub mod motion;
+mod planner;
 mod plc;
 pub mod profile;
 mod resync;
@@ -155,6 +156,10 @@ pub(crate) struct Exec<'a> {
     /// A spindle start has been commanded since the last cutting move: the next one waits for the
     /// spindle at speed (`PlantConfig::feed_waits_at_speed`), through `Step::AwaitAtSpeed`.
     atspeed_next_feed: bool,
+    /// LinuxCNC's path control mode is G64 (`Step::PathMode`; LinuxCNC powers on in it).
+    path_continuous: bool,
+    /// Blocks the planner has read ahead of their turn (`planner.rs`), read from here first.
+    ahead: planner::Ahead,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -245,6 +250,8 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         coast: None,
         follow_v: None,
         atspeed_next_feed: false,
+        path_continuous: true,
+        ahead: planner::Ahead::new(),
     };
     ex.main_loop();
 }

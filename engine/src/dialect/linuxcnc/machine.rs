@@ -122,6 +122,9 @@ pub struct CycleMemo {
 pub struct Cfg {
     max_rpm: f64,
     overshoot_pitches: f64,
+    /// LinuxCNC 2.9's planner (`nc.trajectory_planner` 209): the path control mode is passed on
+    /// to the executor (`Step::PathMode`, DEC-163).
+    tp_2_9: bool,
 }
 
 impl Cfg {
@@ -130,6 +133,7 @@ impl Cfg {
         Cfg {
             max_rpm: p.get("nc.spindle_max_rpm").max(1.0),
             overshoot_pitches: p.get("nc.rigid_overshoot_pitches"),
+            tp_2_9: p.get("nc.trajectory_planner") < 209.5,
         }
     }
 }
@@ -147,6 +151,8 @@ pub struct Machine {
     pub inch: bool,
     /// G90.
     pub absolute: bool,
+    /// G64 (LinuxCNC powers on in it, emccanon.cc INIT_CANON); false under G61 and G61.1.
+    pub continuous: bool,
     /// G90.1: arc centres absolute.
     pub arc_absolute: bool,
     /// G7.
@@ -190,6 +196,7 @@ impl Machine {
             off: [0; 3],
             inch: false,
             absolute: true,
+            continuous: true,
             arc_absolute: false,
             diameter: false,
             plane: Plane::Xy,
@@ -258,6 +265,14 @@ impl Machine {
         match self.feed_mode {
             FeedMode::PerRev => Feed::PerRev(self.feed * self.unit()),
             _ => Feed::PerMin(self.feed * self.unit()),
+        }
+    }
+
+    /// Tells the executor the path control mode from here on (only for LinuxCNC 2.9's planner,
+    /// whose half acceleration depends on it: DEC-163).
+    pub fn path_mode(&self, continuous: bool, out: &mut Vec<Step>) {
+        if self.cfg.tp_2_9 {
+            out.push(Step::PathMode { continuous });
         }
     }
 
@@ -407,6 +422,10 @@ impl Machine {
                 410 | 420 => self.comp = true,
                 900 => self.absolute = true,
                 910 => self.absolute = false,
+                610 | 611 | 640 => {
+                    self.continuous = g == 640;
+                    self.path_mode(self.continuous, out);
+                }
                 901 => self.arc_absolute = true,
                 911 => self.arc_absolute = false,
                 980 => self.old_z = true,
