@@ -57,14 +57,15 @@ fn a_g64_rapid_that_no_move_follows_runs_at_half_acceleration_in_2_9() {
 
 #[test]
 fn a_move_that_another_follows_keeps_its_acceleration_the_last_one_is_halved() {
-    // The rapid up is followed by the rapid across (a move enters the queue: tangent, blend arc
-    // or stop, never parabolic here); the rapid across by the program end.
-    let t = run(209.0, "G21 G90\nG0 Z5\nG0 X10\nM2\n");
-    let (az, _) = peak_accel_and_time(&axis(&t, 2));
-    let (ax, tx) = peak_accel_and_time(&axis(&t, 0));
-    assert!((az - 508.0).abs() < 15.0, "Z {az} mm/s²");
-    assert!((ax - 254.0).abs() < 10.0, "X {ax} mm/s²");
-    assert!((tx as f64 - (10.0 / 30.48 * 1000.0 + 120.0)).abs() <= 3.0, "X {tx} ms");
+    // The rapid up is followed by the rapid back down (a move enters the queue: a reversal, which
+    // stops exactly); the rapid down by the program end.
+    let z = axis(&run(209.0, "G21 G90\nG0 Z5\nG0 Z0\nM2\n"), 2);
+    let top = z.iter().position(|v| *v >= 5.0).unwrap();
+    let (up, _) = peak_accel_and_time(&z[..=top]);
+    let (down, t_down) = peak_accel_and_time(&z[top..]);
+    assert!((up - 508.0).abs() < 15.0, "up {up} mm/s²");
+    assert!((down - 254.0).abs() < 10.0, "down {down} mm/s²");
+    assert!((t_down as f64 - (5.0 / 30.48 * 1000.0 + 120.0)).abs() <= 3.0, "down {t_down} ms");
 }
 
 #[test]
@@ -84,21 +85,85 @@ fn a_rapid_before_g33_1_is_halved_one_before_g33_is_not() {
 
 #[test]
 fn exact_stop_and_canned_cycles_keep_the_full_acceleration() {
-    // Under G61.1 nothing is halved; a canned cycle's moves run in G61, and the G64 rapid before
-    // it is followed by the cycle's first rapid: the same motion as the planner after 2.9.
-    for program in [
-        "G21 G90 G61.1\nG0 Z5\nG0 X10\nM2\n",
-        "G21 G90\nG0 X0 Y0 Z5\nG98 G81 X10 Y10 Z-5 R2 F300\nX30\nG80\nM2\n",
-    ] {
-        let (t29, t210) = (run(209.0, program), run(210.0, program));
-        for i in 0..3 {
-            assert_eq!(axis(&t29, i), axis(&t210, i), "{program}: axis {i}");
-        }
+    // Under G61.1 nothing is halved or blended: the same motion as the planner after 2.9.
+    let program = "G21 G90 G61.1\nG0 Z5\nG0 X10\nM2\n";
+    let (t29, t210) = (run(209.0, program), run(210.0, program));
+    for i in 0..3 {
+        assert_eq!(axis(&t29, i), axis(&t210, i), "axis {i}");
     }
+    // A canned cycle's moves run in G61: once the G64 rapid before it has blended into the
+    // cycle's first rapid, no Z ramp of the cycle runs at half acceleration (a halved 30.48 mm/s
+    // ramp would show 120 samples near 254 mm/s²).
+    let t = run(209.0, "G21 G90\nG0 X0 Y0 Z5\nG98 G81 X10 Y10 Z-5 R2 F300\nX30\nG80\nM2\n");
+    let (x, z) = (axis(&t, 0), axis(&t, 2));
+    let from = x.iter().position(|v| *v >= 10.0).unwrap();
+    let halved = z[from..].windows(3).filter(|w| ((w[2] - 2.0 * w[1] + w[0]) * 1e6).abs() > 200.0).count();
+    let full = z[from..].windows(3).filter(|w| ((w[2] - 2.0 * w[1] + w[0]) * 1e6).abs() > 400.0).count();
+    assert!(halved - full < 30, "{halved} samples above 200 mm/s², {full} above 400");
+    assert!(full > 200, "{full}");
     // After the cycle (G64 again), a lone rapid is halved once more.
     let t = run(209.0, "G21 G90\nG0 Z5\nG81 X10 Z-1 R2 F300\nG80\nG0 X20\nM2\n");
     let xs = axis(&t, 0);
     let k = xs.iter().position(|x| *x > 10.0).unwrap();
     let (a, _) = peak_accel_and_time(&xs[k - 1..]);
     assert!((a - 254.0).abs() < 10.0, "the rapid after G80: {a} mm/s²");
+}
+
+/// The magnitude of the acceleration vector (mm/s², second differences at 1 ms) at each sample.
+fn accel_magnitudes(t: &Trace) -> Vec<f64> {
+    let (x, y, z) = (axis(t, 0), axis(t, 1), axis(t, 2));
+    (1..x.len() - 1)
+        .map(|k| {
+            let d = |v: &[f64]| (v[k + 1] - 2.0 * v[k] + v[k - 1]) * 1e6;
+            (d(&x).powi(2) + d(&y).powi(2) + d(&z).powi(2)).sqrt()
+        })
+        .collect()
+}
+
+/// The time (ms) from the first move until every axis is at rest at the end.
+fn run_time(t: &Trace) -> usize {
+    let (x, z) = (axis(t, 0), axis(t, 2));
+    let moving = |k: usize| x[k] != x[k - 1] || z[k] != z[k - 1];
+    let first = (1..x.len()).find(|&k| moving(k)).unwrap();
+    let last = (1..x.len()).rfind(|&k| moving(k)).unwrap();
+    last - first + 1
+}
+
+#[test]
+fn two_g64_rapids_that_turn_are_joined_by_2_9_s_blend_arc() {
+    // Up 5 mm, then 10 mm across, at 30.48 mm/s and 508 mm/s² per axis (the g81 corner in one
+    // plane): 2.9 turns on an arc of R = 30.48² / (√¾ · 508) ... the parabolic-equivalent radius
+    // 2.33 mm (blendmath.c blendComputeParameters, DEC-164) at the full speed.
+    let program = "G21 G90\nG0 Z5\nG0 X10\nM2\n";
+    let (blended, exact) = (run(209.0, program), run(210.0, program));
+    let (x, z) = (axis(&blended, 0), axis(&blended, 2));
+    // X leaves before Z has arrived: where X starts, Z is 2.33 mm below the corner.
+    let leave = x.iter().position(|v| *v > 0.0).unwrap();
+    assert!((z[leave] - (5.0 - 2.33)).abs() < 0.05, "X leaves at Z {}", z[leave]);
+    // It never reaches the corner: the closest is R·(√2 − 1) = 0.96 mm from it.
+    let closest =
+        x.iter().zip(&z).map(|(x, z)| (x * x + (z - 5.0).powi(2)).sqrt()).fold(f64::INFINITY, f64::min);
+    assert!((closest - 2.33 * (2f64.sqrt() - 1.0)).abs() < 0.03, "{closest} mm from the corner");
+    // The arc runs at 30.48 mm/s: its normal acceleration v²/R = 399 mm/s²; no sample of the
+    // run exceeds the axes' 508 mm/s², for the vector as a whole.
+    let peak = accel_magnitudes(&blended).into_iter().fold(0.0, f64::max);
+    assert!(peak <= 508.0 * 1.03, "{peak} mm/s²");
+    // The time: up to the arc from rest (a 60 ms ramp over 0.914 mm, then cruise), the arc
+    // (R·π/2 at 30.48 mm/s), across at 30.48 mm/s and the stop at half acceleration (the program
+    // end follows: 120 ms over 1.829 mm). Stopping at the corner instead: 224 + 388 ms.
+    let (v, r) = (30.48e-3, 2.329);
+    let expected =
+        60.0 + (5.0 - r - 0.914) / v + r * std::f64::consts::FRAC_PI_2 / v + (10.0 - r - 1.829) / v + 120.0;
+    let (tb, te) = (run_time(&blended), run_time(&exact));
+    assert!((tb as f64 - expected).abs() <= 4.0, "blended {tb} ms, expected {expected}");
+    assert!((te as f64 - 612.0).abs() <= 3.0, "exact {te} ms");
+}
+
+#[test]
+fn no_arc_under_g61_1_or_between_a_rapid_and_a_feed() {
+    for program in ["G21 G90 G61.1\nG0 Z5\nG0 X10\nM2\n", "G21 G90\nG0 Z5\nG1 X10 F600\nM2\n"] {
+        let (x, z) = (axis(&run(209.0, program), 0), axis(&run(209.0, program), 2));
+        let leave = x.iter().position(|v| *v > 0.0).unwrap();
+        assert_eq!(z[leave], 5.0, "{program}");
+    }
 }

@@ -161,6 +161,7 @@ impl Exec<'_> {
                 self.steps.push_front(s);
             }
         }
+        self.drop_blend();
         self.hold_requested = true;
     }
 
@@ -197,7 +198,9 @@ impl Exec<'_> {
             }
             // A coordinated rapid (LinuxCNC's G0, one straight line, LCNC-MOT-01): the lowest
             // rapid acceleration of the axes that have one.
-            Some(Path::Line { .. }) if matches!(self.motion_step, Some(crate::plan::Step::Rapid { .. })) => {
+            Some(Path::Line { .. } | Path::Bend { .. })
+                if matches!(self.motion_step, Some(crate::plan::Step::Rapid { .. })) =>
+            {
                 rapid(&|_| true)
             }
             Some(_) => feed,

@@ -6,6 +6,7 @@
 //! of a step). The CNC acts on interpolation-period ticks; the PLC and drive ([`plc`]) answer
 //! after their own delays.
 
+mod blend;
 pub mod config;
 mod css;
 mod follow;
@@ -160,6 +161,10 @@ pub(crate) struct Exec<'a> {
     path_continuous: bool,
     /// Blocks the planner has read ahead of their turn (`planner.rs`), read from here first.
     ahead: planner::Ahead,
+    /// LinuxCNC 2.9's blend arc planned to run before the next rapid (`planner.rs`, DEC-164).
+    blend: Option<planner::PendingBlend>,
+    /// The speed (nm/µs) and nominal length (nm) the next rapid enters with, after a blend arc.
+    entry: Option<(f64, f64)>,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -252,6 +257,8 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         atspeed_next_feed: false,
         path_continuous: true,
         ahead: planner::Ahead::new(),
+        blend: None,
+        entry: None,
     };
     ex.main_loop();
 }

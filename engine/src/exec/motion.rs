@@ -58,6 +58,25 @@ pub enum Path {
         /// Spindle direction, +1 forward.
         spin: f64,
     },
+    /// A circular arc through X, Y and Z in any plane (LinuxCNC 2.9's blend arc between two moves,
+    /// tp.c `tpCreateLineLineBlend`, DEC-164): the point at `s` along it is
+    /// `center + radius·(cos φ·u + sin φ·w)`, φ = `sweep`·s/`len`; other axes stay.
+    Bend {
+        /// Path profile.
+        profile: Profile,
+        /// Arc length, nm.
+        len: f64,
+        /// Centre (X, Y, Z), nm.
+        center: [f64; 3],
+        /// Unit vector from the centre to the start.
+        u: [f64; 3],
+        /// Unit vector in the arc's plane, perpendicular to `u`, towards the travel.
+        w: [f64; 3],
+        /// Radius, nm.
+        radius: f64,
+        /// Angle swept, rad (> 0).
+        sweep: f64,
+    },
     /// A spindle-synchronised thread pass: the drive axis travels as `profile` gives (locked
     /// to the spindle after its catch-up ramp, or reaching lead × speed: `exec/thread.rs`); the
     /// infeed axis is a function of that travel through the knots; other axes move linearly
@@ -138,6 +157,7 @@ impl Motion {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.total).max().unwrap_or(0),
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
+            | Path::Bend { profile, .. }
             | Path::Tap { profile, .. }
             | Path::Thread { profile, .. } => profile.total,
         }
@@ -204,6 +224,7 @@ impl Motion {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.eval(dt).1).fold(0.0, f64::max),
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
+            | Path::Bend { profile, .. }
             | Path::Tap { profile, .. }
             | Path::Thread { profile, .. } => profile.eval(dt).1,
         }
@@ -222,6 +243,7 @@ impl Motion {
             }
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
+            | Path::Bend { profile, .. }
             | Path::Tap { profile, .. }
             | Path::Thread { profile, .. } => *profile = profile.stop_from(dt, a, period),
         }
@@ -267,6 +289,13 @@ impl Motion {
                 let r = radius + (radius_end - radius) * f;
                 p[i0] = round_i64(center[0] + r * libm::cos(a));
                 p[i1] = round_i64(center[1] + r * libm::sin(a));
+            }
+            Path::Bend { profile, len, center, u, w, radius, sweep } => {
+                let phi = sweep * profile.eval(dt).0 / len.max(1.0);
+                let (c, sn) = (libm::cos(phi), libm::sin(phi));
+                for i in 0..3 {
+                    p[i] = round_i64(center[i] + radius * (c * u[i] + sn * w[i]));
+                }
             }
             Path::Tap { profile, axis, backlash, .. } => {
                 let d = m.target[*axis] - m.start[*axis];

@@ -18,9 +18,12 @@
 
 use std::collections::VecDeque;
 
-use super::Exec;
+use super::motion::Path;
+use super::profile::Profile;
+use super::{blend, Exec};
 use crate::alarm::Alarm;
-use crate::plan::Step;
+use crate::plan::{Pos, Step};
+use crate::trace::AXES;
 
 /// Blocks read ahead at most to find the next move (blocks that queue nothing, such as `G91`
 /// or an o-word line, are looked through).
@@ -66,39 +69,148 @@ impl Exec<'_> {
         if !self.cfg.parabolic_half_accel || !self.path_continuous {
             return 1.0;
         }
-        if !self.single_block && self.next_move_queued() {
+        if !self.single_block && self.next_move().is_some() {
             1.0
         } else {
             0.5
         }
     }
 
-    /// Whether a move follows the present one before any queue buster: looks through the steps
-    /// queued, then reads blocks ahead (kept in `ahead` until their turn).
-    fn next_move_queued(&mut self) -> bool {
+    /// The move that follows the present one in the planner's queue, if one does before any queue
+    /// buster: looks through the steps queued, then reads blocks ahead (kept in `ahead` until
+    /// their turn).
+    fn next_move(&mut self) -> Option<Step> {
         for s in &self.steps {
             match queue_of(s) {
-                Queue::Move => return true,
-                Queue::Buster => return false,
+                Queue::Move => return Some(s.clone()),
+                Queue::Buster => return None,
                 Queue::Quiet => {}
             }
         }
         for k in 0..LOOK_AHEAD_BLOCKS {
             if k == self.ahead.len() {
-                let Some(block) = self.program.blocks.get(self.pc + k) else { return false };
+                let block = self.program.blocks.get(self.pc + k)?;
                 let mut out = Vec::new();
                 let read = self.interp.block(block, &mut out).map(|()| out);
                 self.ahead.push_back(read);
             }
-            let Ok(steps) = &self.ahead[k] else { return false };
+            let Ok(steps) = &self.ahead[k] else { return None };
             for s in steps {
                 match queue_of(s) {
-                    Queue::Move => return true,
-                    Queue::Buster => return false,
+                    Queue::Move => return Some(s.clone()),
+                    Queue::Buster => return None,
                     Queue::Quiet => {}
                 }
             }
         }
-        false
+        None
     }
+
+    /// LinuxCNC 2.9's G64 rapid (DEC-164): when the next move in the queue is a rapid that turns
+    /// off this one's line, the two are joined by a blend arc (`blend::blend_arc`): this rapid
+    /// runs to the arc's start and reaches it at the arc's speed, the arc runs before the next
+    /// rapid (`start_blend_arc`), which starts at its end at that speed. A rapid entered from an
+    /// arc starts at the arc's speed. False: an ordinary rapid (any other planner, or nothing to
+    /// blend and no speed to enter with).
+    pub(super) fn start_blended_rapid(&mut self, target: Pos, scale: f64) -> bool {
+        let entry = self.entry.take();
+        if !self.cfg.parabolic_half_accel || !self.cfg.coordinated_rapid {
+            return false;
+        }
+        let f = |p: Pos| [p[0] as f64, p[1] as f64, p[2] as f64];
+        let (p0, p1) = (f(self.cmd), f(target));
+        if (3..AXES).any(|i| target[i] != self.cmd[i]) {
+            return false;
+        }
+        let len = ((p1[0] - p0[0]).powi(2) + (p1[1] - p0[1]).powi(2) + (p1[2] - p0[2]).powi(2)).sqrt();
+        let (v0, nominal) = entry.unwrap_or((0.0, len));
+        let rate = self.cfg.rapid_nm_min.map(|r| r / 60e6);
+        let acc: [f64; AXES] = std::array::from_fn(|i| {
+            rate[i] / self.cfg.rapid_ramp_us[i].max(1) as f64 * if scale > 0.0 { scale } else { 1.0 }
+        });
+        let next = if self.path_continuous && !self.single_block {
+            match self.next_move() {
+                Some(Step::Rapid { target: p2 }) if (3..AXES).all(|i| p2[i] == target[i]) => Some(p2),
+                _ => None,
+            }
+        } else {
+            None
+        };
+        let arc =
+            next.and_then(|p2| blend::blend_arc(p0, p1, f(p2), nominal, v0, rate, acc).map(|a| (a, p2)));
+        if arc.is_none() && v0 <= 0.0 {
+            return false;
+        }
+        if len <= 0.0 {
+            return false;
+        }
+        let u = [(p1[0] - p0[0]) / len, (p1[1] - p0[1]) / len, (p1[2] - p0[2]) / len];
+        let (vmax, amax) =
+            (blend::along(u, [rate[0], rate[1], rate[2]]), blend::along(u, [acc[0], acc[1], acc[2]]));
+        let (end, dist, v1) = match &arc {
+            Some((a, _)) => {
+                let mut end = self.cmd;
+                for i in 0..3 {
+                    end[i] = crate::units::round_i64(a.start[i]);
+                }
+                (end, len - a.trim, a.v)
+            }
+            None => (target, len, 0.0),
+        };
+        let profile = Profile::between(dist.max(0.0), v0, vmax, v1, amax, self.cfg.period_us);
+        // Backlash is the joints' business (as `start_rapid`); the directions are kept.
+        for i in 0..3 {
+            let d = target[i] - self.cmd[i];
+            if d != 0 {
+                self.backlash(i, d.signum() as i8);
+            }
+        }
+        self.start_motion(end, Path::Line { profile, len: dist.max(0.0) });
+        if let Some((arc, next_target)) = arc {
+            let p2 = f(next_target);
+            let nominal2 =
+                ((p2[0] - p1[0]).powi(2) + (p2[1] - p1[1]).powi(2) + (p2[2] - p1[2]).powi(2)).sqrt();
+            self.blend = Some(PendingBlend { arc, next_target, nominal2 });
+        }
+        true
+    }
+
+    /// Runs the blend arc planned by the rapid before (`start_blended_rapid`) ahead of the rapid
+    /// to `target`, which is put back to start from the arc's end at its speed. False: no arc is
+    /// pending for this rapid.
+    pub(super) fn start_blend_arc(&mut self, target: Pos) -> bool {
+        let Some(b) = self.blend.take() else { return false };
+        if b.next_target != target {
+            return false;
+        }
+        let a = &b.arc;
+        let len = a.radius * a.sweep;
+        let profile = Profile::between(len, a.v, a.v, a.v, 1.0, self.cfg.period_us);
+        let mut end = self.cmd;
+        for i in 0..3 {
+            end[i] = crate::units::round_i64(a.end[i]);
+        }
+        let path =
+            Path::Bend { profile, len, center: a.center, u: a.u, w: a.w, radius: a.radius, sweep: a.sweep };
+        self.start_motion(end, path);
+        self.steps.push_front(Step::Rapid { target });
+        self.entry = Some((a.v, b.nominal2));
+        true
+    }
+
+    /// A hold or a stop drops the blend planned ahead: the rest runs from where the axes stop.
+    pub(super) fn drop_blend(&mut self) {
+        self.blend = None;
+        self.entry = None;
+    }
+}
+
+/// A blend arc planned at the start of a rapid, to run before the next rapid.
+#[derive(Debug, Clone)]
+pub(super) struct PendingBlend {
+    arc: blend::Arc3,
+    /// Where the next rapid ends.
+    next_target: Pos,
+    /// The next rapid's nominal length (corner to end), nm.
+    nominal2: f64,
 }

@@ -154,8 +154,13 @@ impl Exec<'_> {
             Step::Rapid { target } => {
                 // Under G96 the speed for the end point, from the start of the rapid (DEC-66).
                 self.css_follow(target[0]);
+                if self.start_blend_arc(target) {
+                    return;
+                }
                 let scale = self.planner_accel_scale();
-                self.start_rapid(target, scale)
+                if !self.start_blended_rapid(target, scale) {
+                    self.start_rapid(target, scale)
+                }
             }
             Step::Feed { target, feed } => {
                 let len = path_len(&self.cmd, &target);
