@@ -29,9 +29,11 @@ const EXPECTED_DIVERGENT: [(&str, &str); 3] = [
     ),
     (
         "debian-2.9/g76",
-        "2.9 blends the rapids out and in between passes (X never reaches the retract 5.75) and, under \
-         G64, each pass starts 0.19-0.67 mm out of sync; the exact-stop recording of the same program \
-         is conformant since the recorded spindle angle and DEC-147 (DEC-144, L-124)",
+        "2.9 joins each synchronised G76 pass to its exit taper with a blend arc (X leaves at Z \
+         -8.517, 0.559 mm before the joint, R 0.905 mm) run under the taper's 3.354 mm per \
+         revolution of path: Z up to 0.674 mm ahead of the reference's spindle law at 2086 ms \
+         recorded (the reference stops at the joint and catches up, DEC-147); three sync failures \
+         per pass, the envelope conformant with 2.9's planner (L-124)",
     ),
 ];
 
