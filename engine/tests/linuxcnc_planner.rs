@@ -167,3 +167,28 @@ fn no_arc_under_g61_1_or_between_a_rapid_and_a_feed() {
         assert_eq!(z[leave], 5.0, "{program}");
     }
 }
+
+#[test]
+fn a_g64_g76_pass_runs_on_into_its_exit_taper_through_2_9_s_blend_arc() {
+    // testdata/linuxcnc/programs/g76.ngc: pass 1 cuts at X4.25 to Z-9.0757, then the 45°-ish
+    // exit taper to X5.25 Z-9.5757 (rs274 -g). LinuxCNC 2.9 (debian-2.9/g76) leaves the thread
+    // at Z -8.517, 0.559 mm before the joint (the arc R 0.905 mm of blendmath.c's rules), without
+    // stopping; the exact-stop model (DEC-147, the default planner) stops at the joint.
+    let program =
+        "G21 G18 G90\nM3 S300\nG0 X5 Z2\nG76 P1.5 Z-10 I-0.5 J0.25 R1 K1 Q29.5 H1 E0.5 L2\nM5\nM2\n";
+    let leave_z = |planner: f64| {
+        let t = run(planner, program);
+        let (x, z) = (axis(&t, 0), axis(&t, 2));
+        // The first pass: X at 4.25 while Z runs down, then X moves out.
+        let cut = x.iter().position(|v| (*v - 4.25).abs() < 1e-6).unwrap();
+        let leave = cut + x[cut..].iter().position(|v| *v > 4.25 + 1e-6).unwrap();
+        let speed = (z[leave - 1] - z[leave - 2]) * 1e3;
+        (z[leave], speed)
+    };
+    let (z29, v29) = leave_z(209.0);
+    let (z210, v210) = leave_z(210.0);
+    assert!((z29 + 8.517).abs() < 0.01, "2.9 leaves the thread at Z {z29}");
+    assert!((v29 + 7.5).abs() < 0.2, "at the thread's speed: {v29} mm/s");
+    assert!((z210 + 9.0757).abs() < 0.005, "the default leaves at the joint: Z {z210}");
+    assert!(v210.abs() < 0.5, "at rest: {v210} mm/s");
+}

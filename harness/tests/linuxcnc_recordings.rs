@@ -16,7 +16,7 @@ fn data() -> PathBuf {
 
 /// Recordings known to diverge (set/name), each with its reason: a ratchet, taken off the list
 /// when it becomes conformant.
-const EXPECTED_DIVERGENT: [(&str, &str); 3] = [
+const EXPECTED_DIVERGENT: [(&str, &str); 2] = [
     (
         "debian-2.9-exact-stop/g84_g18_g61_1",
         "the permuted G18 G84 feed points of debian-2.9/g84_g18, under exact stop too (DEC-84)",
@@ -26,14 +26,6 @@ const EXPECTED_DIVERGENT: [(&str, &str); 3] = [
         "LinuxCNC's G18 G84 feeds to permuted points (X = Y bottom, Y = hole Z, Z = hole X) in real \
          motion too, against its manual's tool axis; DEC-84 keeps the manual's; conformant to \
          rs274's own moves (as-run/g84_g18_rs274.ngc, test below)",
-    ),
-    (
-        "debian-2.9/g76",
-        "2.9 joins each synchronised G76 pass to its exit taper with a blend arc (X leaves at Z \
-         -8.517, 0.559 mm before the joint, R 0.905 mm) run under the taper's 3.354 mm per \
-         revolution of path: Z up to 0.674 mm ahead of the reference's spindle law at 2086 ms \
-         recorded (the reference stops at the joint and catches up, DEC-147); three sync failures \
-         per pass, the envelope conformant with 2.9's planner (L-124)",
     ),
 ];
 
@@ -65,12 +57,15 @@ fn the_debian_2_9_divergences_are_what_their_reasons_say() {
 /// before the G33.1 holes, which no move follows in the planner's queue, run at half
 /// MAX_ACCELERATION (Z 1.006 mm 90 ms into the move, 254 mm/s², DEC-163); so is g81, whose G64
 /// rapid up to Z5 and the cycle's first rapid are joined by 2.9's blend arc (R 2.33 mm at 30.48
-/// mm/s: X and Y leave at Z 2.62, DEC-164; without it X was 0.37 mm outside the band at 202 ms).
+/// mm/s: X and Y leave at Z 2.62, DEC-164; without it X was 0.37 mm outside the band at 202 ms),
+/// and g76, whose rapids between passes are joined by arcs and whose passes run on into their
+/// exit taper through a synchronised blend arc (X leaves at Z -8.517, 0.559 mm before the joint;
+/// without it Z was up to 0.674 mm out of sync at each pass's taper).
 /// The planner after 2.9 (the default: full acceleration, every move ending at rest) is not
 /// conformant to them: the parameter is what tells them apart.
 #[test]
 fn the_2_9_planner_is_what_makes_the_g64_recordings_conformant() {
-    for name in ["g331", "g331_g91", "g81"] {
+    for name in ["g331", "g331_g91", "g81", "g76"] {
         let trace = format!("recordings/debian-2.9/csv/{name}.csv");
         let program = format!("programs/{name}.ngc");
         let (code, text) = check_with(&program, "linuxcnc-sim-2.9.params.yaml", &trace);

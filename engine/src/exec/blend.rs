@@ -44,6 +44,9 @@ pub struct Arc3 {
     pub v: f64,
     /// Distance from the corner to the start and to the end, nm.
     pub trim: f64,
+    /// The acceleration the plane of the two moves allows, nm/µs² (the arc's tangential
+    /// acceleration is half of it: tc.c `tcGetTangentialMaxAccel`, BLEND_ACC_RATIO_TANGENTIAL).
+    pub a_max: f64,
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -156,7 +159,7 @@ pub fn blend_arc(
     let start = sub(p1, scale(u1, trim));
     let end = add(p1, scale(u2, trim));
     let u = scale(sub(start, center), 1.0 / radius);
-    Some(Arc3 { start, end, center, u, w: u1, radius, sweep: phi, v, trim })
+    Some(Arc3 { start, end, center, u, w: u1, radius, sweep: phi, v, trim, a_max })
 }
 
 #[cfg(test)]

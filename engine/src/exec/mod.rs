@@ -12,6 +12,7 @@ mod css;
 mod follow;
 mod inputs;
 pub mod motion;
+mod pass_blend;
 mod planner;
 mod plc;
 pub mod profile;
@@ -165,6 +166,8 @@ pub(crate) struct Exec<'a> {
     blend: Option<planner::PendingBlend>,
     /// The speed (nm/µs) and nominal length (nm) the next rapid enters with, after a blend arc.
     entry: Option<(f64, f64)>,
+    /// LinuxCNC 2.9's blend arc between a G64 thread pass and its exit taper (`pass_blend.rs`).
+    pass_blend: Option<pass_blend::PassBlend>,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -259,6 +262,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         ahead: planner::Ahead::new(),
         blend: None,
         entry: None,
+        pass_blend: None,
     };
     ex.main_loop();
 }

@@ -202,6 +202,7 @@ impl Exec<'_> {
     pub(super) fn drop_blend(&mut self) {
         self.blend = None;
         self.entry = None;
+        self.pass_blend = None;
     }
 }
 
