@@ -12,9 +12,10 @@
 //! coolant or tool command, a dwell, a stop, the program end). LinuxCNC fixed it after 2.9
 //! (#4220: half acceleration only during an actual blend), which the default follows.
 //!
-//! Not modelled (L-124): the blends themselves (2.9's blend arc between two G64 moves, tp.c
-//! `tpCreateLineLineBlend`; its parabolic blend, `tpDoParabolicBlending`): such a pair stops
-//! exactly here, at full acceleration.
+//! Two G64 rapids that turn are joined by 2.9's blend arc (`blend.rs`, DEC-164; a thread pass and
+//! its exit taper: `pass_blend.rs`). Not modelled (L-124): arcs between feeds, lines and arcs,
+//! and 2.9's parabolic blend (`tpDoParabolicBlending`): such a pair stops exactly here, at full
+//! acceleration.
 
 use std::collections::VecDeque;
 
