@@ -192,3 +192,30 @@ fn a_g64_g76_pass_runs_on_into_its_exit_taper_through_2_9_s_blend_arc() {
     assert!((z210 + 9.0757).abs() < 0.005, "the default leaves at the joint: Z {z210}");
     assert!(v210.abs() < 0.5, "at rest: {v210} mm/s");
 }
+
+/// The slowest path speed (mm/s) through the corner X30 Y0: from X15 on the way there to Y10 on
+/// the way on (both moves at full speed there).
+fn corner_speed(t: &Trace) -> f64 {
+    let (x, y) = (axis(t, 0), axis(t, 1));
+    (1..x.len())
+        .filter(|&k| x[k - 1] > 15.0 && y[k] < 10.0)
+        .map(|k| ((x[k] - x[k - 1]).hypot(y[k] - y[k - 1])) * 1e3)
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn a_canned_cycle_leaves_canon_s_tolerance_and_g64_p_sets_one() {
+    // rs274 restores G64 after a cycle with canon's tolerance, 0.001 inch until a G64 gives one
+    // (emccanon.cc INIT_CANON): the next corner (90°, 30.48 mm/s) turns on an arc of
+    // R = 0.0254 · cos 45° / (1 − sin 45°) · tan 45° = 0.061 mm at √(440 · 0.061) = 5.2 mm/s.
+    let cycle = "G21 G90\nG0 Z5\nG81 X0 Z-1 R2 F300\nG80\n";
+    let after = run(209.0, &format!("{cycle}G0 X30 Y0\nG0 X30 Y20\nM2\n"));
+    let v = corner_speed(&after);
+    assert!((v - 5.2).abs() < 0.3, "after a cycle: {v} mm/s at the corner");
+    // G64 without P: no tolerance, the arc of the moves' lengths at the full speed.
+    let g64 = run(209.0, &format!("{cycle}G64\nG0 X30 Y0\nG0 X30 Y20\nM2\n"));
+    assert!(corner_speed(&g64) > 25.0, "{}", corner_speed(&g64));
+    // G64 P0.5: R = 0.5 · 2.414 = 1.21 mm, √(440 · 1.21) = 23.1 mm/s.
+    let p = run(209.0, &format!("{cycle}G64 P0.5\nG0 X30 Y0\nG0 X30 Y20\nM2\n"));
+    assert!((corner_speed(&p) - 23.1).abs() < 0.5, "{}", corner_speed(&p));
+}

@@ -40,17 +40,23 @@ fn params_of(set: &str) -> &'static str {
 }
 
 /// The Debian 2.9 divergences are what their reasons say: g84_g18 is conformant to rs274's own
-/// canonical moves for G18 G84 (written out as plain moves, checked without 2.9's planner: the
-/// file does not carry the cycle's G61, and its first corner blended with the tolerance the
-/// session's earlier canned cycles left, DEC-164). Anything else that differed would fail here.
+/// canonical moves for G18 G84, written out with their path control modes, under 2.9's planner.
+/// Its first corner turns on the small arc of the tolerance the session's earlier canned cycles
+/// left (`G64 P0.0254` in the file, DEC-164): without it the arc is 1.05 mm at 21.5 mm/s and Y
+/// leaves the band by 0.59 mm. Anything else that differed would fail here.
 #[test]
 fn the_debian_2_9_divergences_are_what_their_reasons_say() {
-    let (code, text) = check_with(
-        "as-run/g84_g18_rs274.ngc",
-        "linuxcnc-sim.params.yaml",
-        "recordings/debian-2.9/csv/g84_g18.csv",
-    );
+    let (trace, params) = ("recordings/debian-2.9/csv/g84_g18.csv", "linuxcnc-sim-2.9.params.yaml");
+    let (code, text) = check_with("as-run/g84_g18_rs274.ngc", params, trace);
     assert_eq!(code, 0, "{text}");
+    let program = std::fs::read_to_string(data().join("as-run/g84_g18_rs274.ngc")).unwrap();
+    let loose = program.replace(" P0.0254", "");
+    assert_ne!(program, loose, "the file gives the session's tolerance");
+    let path = std::env::temp_dir().join(format!("lcnc-g84-g18-{}.ngc", std::process::id()));
+    std::fs::write(&path, loose).unwrap();
+    let (code, text) = check_with(path.to_str().unwrap(), params, trace);
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(code, 1, "{text}");
 }
 
 /// g331 and g331_g91 (Debian 2.9, G64) are conformant through 2.9's planner alone: the rapids

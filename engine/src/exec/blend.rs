@@ -87,19 +87,18 @@ fn inscribed(n: [f64; 3], bound: [f64; 3]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// The blend arc LinuxCNC 2.9 puts at the corner `p1` between the rapid `p0 → p1` (of nominal
+/// The blend arc LinuxCNC 2.9 puts at the corner `p1` between the rapid `p0 → p1` (`[p0, p1, p2]`) (of nominal
 /// length `nominal1`: its length before an earlier arc took its start) and the rapid `p1 → p2`,
 /// with the axes' rapid rates `rate` (nm/µs) and accelerations `acc` (nm/µs²); the first move
-/// enters at `v0`. None where 2.9 makes no arc (a reversal, a straight or nearly straight
+/// enters at `v0`; `tolerance` the moves' blend tolerances (G64 P, 0: none). None where 2.9 makes no arc (a reversal, a straight or nearly straight
 /// continuation, a move of no length).
 pub fn blend_arc(
-    p0: [f64; 3],
-    p1: [f64; 3],
-    p2: [f64; 3],
+    [p0, p1, p2]: [[f64; 3]; 3],
     nominal1: f64,
     v0: f64,
     rate: [f64; AXES],
     acc: [f64; AXES],
+    tolerance: [f64; 2],
 ) -> Option<Arc3> {
     let (rate, acc) = ([rate[0], rate[1], rate[2]], [acc[0], acc[1], acc[2]]);
     let (d1, d2) = (sub(p1, p0), sub(p2, p1));
@@ -121,7 +120,10 @@ pub fn blend_arc(
     if kink < KINK_RATIO {
         return None;
     }
-    let tolerance = 0.25 * nominal1.min(len2);
+    // Each move's tolerance, or a quarter of its nominal length where it has none.
+    let t1 = if tolerance[0] > 0.0 { tolerance[0] } else { 0.25 * nominal1 };
+    let t2 = if tolerance[1] > 0.0 { tolerance[1] } else { 0.25 * len2 };
+    let tolerance = t1.min(t2).min(0.25 * nominal1).min(0.25 * len2);
     let (l1, l2) = (len1.min(0.5 * nominal1), 0.5 * len2);
     let d_tol = theta.cos() * tolerance / (1.0 - theta.sin());
     let d_geom = l1.min(l2).min(d_tol);
@@ -175,13 +177,12 @@ mod tests {
         let rate = [30.48; AXES];
         let acc = [508e-6; AXES];
         let a = blend_arc(
-            [0.0; 3],
-            [0.0, 0.0, 5.0 * mm],
-            [10.0 * mm, 10.0 * mm, 5.0 * mm],
+            [[0.0; 3], [0.0, 0.0, 5.0 * mm], [10.0 * mm, 10.0 * mm, 5.0 * mm]],
             5.0 * mm,
             0.0,
             rate,
             acc,
+            [0.0, 0.0],
         )
         .expect("an arc");
         assert!((a.radius / mm - 2.329).abs() < 0.01, "R {}", a.radius / mm);
@@ -195,13 +196,31 @@ mod tests {
         }
     }
 
+    /// The Debian 2.9 recording g84_g18, made after g81 and g84 in one LinuxCNC session: the
+    /// first corner (the rapid to X10 Y6 Z5, then down Y to R) under the 0.001 inch the earlier
+    /// programs' canned cycles left: a tiny arc, X still at 2.85 mm/s when Y starts (~4 mm/s
+    /// along the path, 490 ms); with no tolerance the arc would be 1.05 mm at 21.5 mm/s.
+    #[test]
+    fn a_blend_tolerance_makes_the_arc_small_and_slow() {
+        let mm = 1e6;
+        let rate = [30.48; AXES];
+        let acc = [508e-6; AXES];
+        let (p0, p1, p2) = ([0.0; 3], [10.0 * mm, 6.0 * mm, 5.0 * mm], [10.0 * mm, 2.0 * mm, 5.0 * mm]);
+        let nominal = norm(p1);
+        let tight = blend_arc([p0, p1, p2], nominal, 0.0, rate, acc, [25_400.0, 0.0]).expect("an arc");
+        assert!(tight.v > 3.0 && tight.v < 4.0, "{} mm/s", tight.v);
+        assert!(tight.radius < 0.03 * mm, "R {}", tight.radius / mm);
+        let free = blend_arc([p0, p1, p2], nominal, 0.0, rate, acc, [0.0, 0.0]).expect("an arc");
+        assert!((free.v - 21.5).abs() < 0.2 && (free.radius / mm - 1.05).abs() < 0.01, "{free:?}");
+    }
+
     #[test]
     fn no_arc_for_a_reversal_or_a_straight_line() {
         let rate = [30.48; AXES];
         let acc = [508e-6; AXES];
         let z = |v: f64| [0.0, 0.0, v * 1e6];
-        assert_eq!(blend_arc(z(0.0), z(5.0), z(1.0), 5e6, 0.0, rate, acc), None);
-        assert_eq!(blend_arc(z(0.0), z(5.0), z(9.0), 5e6, 0.0, rate, acc), None);
-        assert_eq!(blend_arc(z(0.0), z(5.0), z(5.0), 5e6, 0.0, rate, acc), None);
+        assert_eq!(blend_arc([z(0.0), z(5.0), z(1.0)], 5e6, 0.0, rate, acc, [0.0; 2]), None);
+        assert_eq!(blend_arc([z(0.0), z(5.0), z(9.0)], 5e6, 0.0, rate, acc, [0.0; 2]), None);
+        assert_eq!(blend_arc([z(0.0), z(5.0), z(5.0)], 5e6, 0.0, rate, acc, [0.0; 2]), None);
     }
 }

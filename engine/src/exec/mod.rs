@@ -160,6 +160,8 @@ pub(crate) struct Exec<'a> {
     atspeed_next_feed: bool,
     /// LinuxCNC's path control mode is G64 (`Step::PathMode`; LinuxCNC powers on in it).
     path_continuous: bool,
+    /// The blend tolerance the planner gives the moves from here on, nm (0: none; `Step::PathMode`).
+    path_tolerance: f64,
     /// Blocks the planner has read ahead of their turn (`planner.rs`), read from here first.
     ahead: planner::Ahead,
     /// LinuxCNC 2.9's blend arc planned to run before the next rapid (`planner.rs`, DEC-164).
@@ -259,6 +261,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         follow_v: None,
         atspeed_next_feed: false,
         path_continuous: true,
+        path_tolerance: 0.0,
         ahead: planner::Ahead::new(),
         blend: None,
         entry: None,

@@ -64,7 +64,8 @@ impl Exec<'_> {
             std::array::from_fn(|i| rate[i] / self.cfg.rapid_ramp_us[i].max(1) as f64);
         let nominal =
             ((joint[0] - p0[0]).powi(2) + (joint[1] - p0[1]).powi(2) + (joint[2] - p0[2]).powi(2)).sqrt();
-        let arc = blend::blend_arc(p0, joint, end, nominal, 0.0, rate, acc)?;
+        let tol = self.path_tolerance;
+        let arc = blend::blend_arc([p0, joint, end], nominal, 0.0, rate, acc, [tol, tol])?;
         let d2 = [end[0] - joint[0], end[1] - joint[1], end[2] - joint[2]];
         let len2 = (d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]).sqrt();
         let along2 = d2[p.along].abs();

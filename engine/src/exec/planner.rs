@@ -80,12 +80,18 @@ impl Exec<'_> {
     /// The move that follows the present one in the planner's queue, if one does before any queue
     /// buster: looks through the steps queued, then reads blocks ahead (kept in `ahead` until
     /// their turn).
-    fn next_move(&mut self) -> Option<Step> {
+    /// With it, the blend tolerance it gets (the path mode's changes on the way).
+    fn next_move(&mut self) -> Option<(Step, f64)> {
+        let mut tol = self.path_tolerance;
         for s in &self.steps {
             match queue_of(s) {
-                Queue::Move => return Some(s.clone()),
+                Queue::Move => return Some((s.clone(), tol)),
                 Queue::Buster => return None,
-                Queue::Quiet => {}
+                Queue::Quiet => {
+                    if let Step::PathMode { tolerance_nm, .. } = s {
+                        tol = *tolerance_nm as f64;
+                    }
+                }
             }
         }
         for k in 0..LOOK_AHEAD_BLOCKS {
@@ -98,9 +104,13 @@ impl Exec<'_> {
             let Ok(steps) = &self.ahead[k] else { return None };
             for s in steps {
                 match queue_of(s) {
-                    Queue::Move => return Some(s.clone()),
+                    Queue::Move => return Some((s.clone(), tol)),
                     Queue::Buster => return None,
-                    Queue::Quiet => {}
+                    Queue::Quiet => {
+                        if let Step::PathMode { tolerance_nm, .. } = s {
+                            tol = *tolerance_nm as f64;
+                        }
+                    }
                 }
             }
         }
@@ -131,14 +141,18 @@ impl Exec<'_> {
         });
         let next = if self.path_continuous && !self.single_block {
             match self.next_move() {
-                Some(Step::Rapid { target: p2 }) if (3..AXES).all(|i| p2[i] == target[i]) => Some(p2),
+                Some((Step::Rapid { target: p2 }, tol2)) if (3..AXES).all(|i| p2[i] == target[i]) => {
+                    Some((p2, tol2))
+                }
                 _ => None,
             }
         } else {
             None
         };
-        let arc =
-            next.and_then(|p2| blend::blend_arc(p0, p1, f(p2), nominal, v0, rate, acc).map(|a| (a, p2)));
+        let tol1 = self.path_tolerance;
+        let arc = next.and_then(|(p2, tol2)| {
+            blend::blend_arc([p0, p1, f(p2)], nominal, v0, rate, acc, [tol1, tol2]).map(|a| (a, p2))
+        });
         if arc.is_none() && v0 <= 0.0 {
             return false;
         }

@@ -288,7 +288,10 @@ impl Exec<'_> {
             Step::Alarm(a) => self.raise(a),
             Step::Report(a) => self.report(a),
             Step::Halt => self.halt(),
-            Step::PathMode { continuous } => self.path_continuous = continuous,
+            Step::PathMode { continuous, tolerance_nm } => {
+                self.path_continuous = continuous;
+                self.path_tolerance = tolerance_nm as f64;
+            }
         }
     }
 

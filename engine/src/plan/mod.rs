@@ -300,6 +300,8 @@ pub enum Step {
     PathMode {
         /// G64.
         continuous: bool,
+        /// The blend tolerance the planner gives the moves from here on, nm (G64 P; 0: none).
+        tolerance_nm: Nm,
     },
     /// An axis locked to a spindle in speed mode (the spindle leads, the axis follows its
     /// encoder): see [`Follow`].

@@ -131,6 +131,11 @@ pub fn canned(m: &mut Machine, g: u32, b: &Eb, out: &mut Vec<Step>) -> Result<()
         }
         body.emit(m, ic, at(m, aa, bb, r), bottom, clear, out);
     }
+    // Restored with canon's tolerance (GET_EXTERNAL_MOTION_CONTROL_TOLERANCE): 0.001 inch until
+    // a G64 gives one, though the planner had none before (L-124, DEC-164).
+    if m.continuous {
+        m.tolerance = m.canon_tolerance;
+    }
     m.path_mode(m.continuous, out);
     out.push(Step::Phase(Phase::Idle));
     m.cyc.cc = cc_word;

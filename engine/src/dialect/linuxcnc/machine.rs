@@ -153,6 +153,13 @@ pub struct Machine {
     pub absolute: bool,
     /// G64 (LinuxCNC powers on in it, emccanon.cc INIT_CANON); false under G61 and G61.1.
     pub continuous: bool,
+    /// The blend tolerance LinuxCNC's planner gives G64 moves, nm: 0 at start-up (none: the
+    /// planner's own limit), G64's P.
+    pub tolerance: Nm,
+    /// The tolerance LinuxCNC's canonical layer keeps, nm, which rs274 restores after a canned
+    /// cycle: 0.001 inch at start-up (emccanon.cc INIT_CANON, never sent to the planner), the
+    /// last G64's P, 0 after G61 or G61.1.
+    pub canon_tolerance: Nm,
     /// G90.1: arc centres absolute.
     pub arc_absolute: bool,
     /// G7.
@@ -197,6 +204,8 @@ impl Machine {
             inch: false,
             absolute: true,
             continuous: true,
+            tolerance: 0,
+            canon_tolerance: 25_400,
             arc_absolute: false,
             diameter: false,
             plane: Plane::Xy,
@@ -268,11 +277,13 @@ impl Machine {
         }
     }
 
-    /// Tells the executor the path control mode from here on (only for LinuxCNC 2.9's planner,
-    /// whose half acceleration depends on it: DEC-163).
+    /// Tells the executor the path control mode from here on, with the planner's blend
+    /// tolerance (only for LinuxCNC 2.9's planner, whose half acceleration and blend arcs
+    /// depend on them: DEC-163, DEC-164).
     pub fn path_mode(&self, continuous: bool, out: &mut Vec<Step>) {
         if self.cfg.tp_2_9 {
-            out.push(Step::PathMode { continuous });
+            let tolerance_nm = if continuous { self.tolerance } else { 0 };
+            out.push(Step::PathMode { continuous, tolerance_nm });
         }
     }
 
@@ -422,9 +433,21 @@ impl Machine {
                 410 | 420 => self.comp = true,
                 900 => self.absolute = true,
                 910 => self.absolute = false,
-                610 | 611 | 640 => {
-                    self.continuous = g == 640;
-                    self.path_mode(self.continuous, out);
+                610 | 611 => {
+                    // emccanon.cc SET_MOTION_CONTROL_MODE keeps the tolerance given (0 here).
+                    self.continuous = false;
+                    self.canon_tolerance = 0;
+                    self.path_mode(false, out);
+                }
+                640 => {
+                    let p = match b.get('P') {
+                        Some(p) if p > 0.0 => self.len(p, 2, b, 'P')?,
+                        _ => 0,
+                    };
+                    self.continuous = true;
+                    self.tolerance = p;
+                    self.canon_tolerance = p;
+                    self.path_mode(true, out);
                 }
                 901 => self.arc_absolute = true,
                 911 => self.arc_absolute = false,
