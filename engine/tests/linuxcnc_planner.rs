@@ -219,3 +219,39 @@ fn a_canned_cycle_leaves_canon_s_tolerance_and_g64_p_sets_one() {
     let p = run(209.0, &format!("{cycle}G64 P0.5\nG0 X30 Y0\nG0 X30 Y20\nM2\n"));
     assert!((corner_speed(&p) - 23.1).abs() < 0.5, "{}", corner_speed(&p));
 }
+
+/// The recorded programs and LinuxCNC's own example programs of the corpus run under 2.9's planner
+/// within the machine's physical limits (no axis beyond its speed or acceleration: the blend arcs,
+/// the entries at speed and the tracked tapers included).
+#[test]
+fn every_recorded_program_keeps_the_physics_under_2_9_s_planner() {
+    use nc_engine::invariants::physics::{check, Limits};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut files: Vec<_> = std::fs::read_dir(root.join("testdata/linuxcnc/programs"))
+        .unwrap()
+        .chain(std::fs::read_dir(root.join("corpus")).unwrap())
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            p.extension().is_some_and(|e| e == "ngc")
+                && (p.starts_with(root.join("testdata")) || name.starts_with("LinuxCNC__"))
+        })
+        .collect();
+    files.sort();
+    assert!(files.len() >= 20, "{files:?}");
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        let mut m = nc_engine::Machine::new("linuxcnc").unwrap();
+        for (id, ax, v) in [("nc.period_us", None, 1000.0), ("nc.trajectory_planner", None, 209.0)] {
+            m.params.set(id, ax, v).unwrap();
+        }
+        for ax in ['X', 'Y', 'Z'] {
+            m.params.set("nc.rapid_mm_min", Some(ax), 1828.8).unwrap();
+            m.params.set("nc.rapid_ramp_ms", Some(ax), 60.0).unwrap();
+        }
+        let Ok(prog) = m.parse(&text) else { continue };
+        let trace = m.run_to_trace(&prog, &RunOptions::default());
+        assert_eq!(check(&trace, &Limits::of(&m), None), vec![], "{}", f.display());
+    }
+}

@@ -42,6 +42,8 @@ pub struct Arc3 {
     pub sweep: f64,
     /// Speed along the arc, nm/µs.
     pub v: f64,
+    /// The arc's own speed limit, nm/µs (its planned speed: the segment's maximum).
+    pub v_plan: f64,
     /// Distance from the corner to the start and to the end, nm.
     pub trim: f64,
     /// The acceleration the plane of the two moves allows, nm/µs² (the arc's tangential
@@ -161,7 +163,7 @@ pub fn blend_arc(
     let start = sub(p1, scale(u1, trim));
     let end = add(p1, scale(u2, trim));
     let u = scale(sub(start, center), 1.0 / radius);
-    Some(Arc3 { start, end, center, u, w: u1, radius, sweep: phi, v, trim, a_max })
+    Some(Arc3 { start, end, center, u, w: u1, radius, sweep: phi, v, v_plan, trim, a_max })
 }
 
 #[cfg(test)]

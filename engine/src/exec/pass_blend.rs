@@ -83,9 +83,10 @@ impl Exec<'_> {
         Some(trim_point)
     }
 
-    /// Whether the pass about to start is the thread of a blended pass (it ends at speed).
-    pub(super) fn pass_blend_pending(&self) -> bool {
-        self.pass_blend.is_some()
+    /// The speed (nm/µs) the thread of a blended pass ends with (the arc's limit), if the pass
+    /// about to start is one.
+    pub(super) fn pass_blend_entry(&self) -> Option<f64> {
+        self.pass_blend.as_ref().map(|b| b.arc.v_plan)
     }
 
     /// Runs the arc and the taper of a blended pass from the arc's start (the taper step `p`).
@@ -125,7 +126,9 @@ impl Exec<'_> {
         };
         let a_arc = 0.5 * a.a_max;
         let dt = period as f64;
-        let (mut s, mut v) = (0.0, rpm.abs() * p.lead_nm / 60e6);
+        // The arc's speed is its own maximum at most (tp.c `tpGetMaxTargetVel`: a synchronised
+        // segment's maximum is the blend arc's planned speed); the thread ended at it.
+        let (mut s, mut v) = (0.0, (rpm.abs() * p.lead_nm / 60e6).min(a.v_plan));
         let mut t = self.now;
         let mut last = target(self, t);
         let mut points = vec![geom(0.0)];
@@ -137,7 +140,16 @@ impl Exec<'_> {
             let err = goal - s;
             let acc = if s < l_arc { a_arc } else { b.a_taper };
             let mut want = v_law + (err.abs() * acc).sqrt().copysign(err);
-            want = want.clamp(0.0, (2.0 * b.a_taper * (total - s).max(0.0)).sqrt());
+            // Slow enough to stop at the taper's end within the period's steps (tp.c
+            // `tpCalculateTrapezoidalAccel`'s discriminant, final speed 0).
+            let half = 0.5 * b.a_taper * dt;
+            let disc = b.a_taper * (2.0 * (total - s) - v * dt) + half * half;
+            let stop = if disc > half * half { disc.sqrt() - half } else { 0.0 };
+            want = want.clamp(0.0, stop);
+            if s < l_arc {
+                // Within the arc's own limit, and slow enough to take the taper's limit at its end.
+                want = want.min(a.v_plan);
+            }
             let v1 = v + (want - v).clamp(-acc * dt, acc * dt);
             s = (s + 0.5 * (v + v1) * dt).min(total);
             v = v1;

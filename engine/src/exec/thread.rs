@@ -155,9 +155,9 @@ impl Exec<'_> {
                     lead,
                     lag: v * v / (2.0 * accel),
                 });
-                if self.pass_blend_pending() {
+                if let Some(v_arc) = self.pass_blend_entry() {
                     // The thread of a blended pass runs on into its arc at speed (DEC-164).
-                    Profile::between(dist, 0.0, v, v, accel, period)
+                    Profile::between(dist, 0.0, v, v.min(v_arc), accel, period)
                 } else {
                     Profile::thread(dist, v, accel, period, now % period)
                 }
