@@ -255,3 +255,55 @@ fn every_recorded_program_keeps_the_physics_under_2_9_s_planner() {
         assert_eq!(check(&trace, &Limits::of(&m), None), vec![], "{}", f.display());
     }
 }
+
+/// Random G64 programs (rapids and feeds through a box, mode changes, G64 P, canned cycles, G33.1,
+/// dwells and spindle commands), some with a feed hold and a cycle start or single block, run
+/// under 2.9's planner to their end without a panic and within the machine's limits.
+#[test]
+fn random_g64_programs_keep_the_physics_under_2_9_s_planner() {
+    use nc_engine::input::{Input, InputSchedule};
+    use nc_engine::invariants::physics::{check, Limits};
+    let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut next = |n: u64| {
+        seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        (seed >> 33) % n
+    };
+    for case in 0..60 {
+        let mut text = String::from("G21 G90 G17\nM3 S800\n");
+        for _ in 0..10 {
+            let (x, y, z) = (next(40) as f64 - 20.0, next(40) as f64 - 20.0, next(20) as f64);
+            text.push_str(&match next(12) {
+                0 => format!("G1 X{x} Y{y} Z{z} F{}\n", 100 + next(900)),
+                1 => "G61.1\n".into(),
+                2 => format!("G64 P{}\n", next(5) as f64 * 0.05),
+                3 => "G64\n".into(),
+                4 => format!("G81 X{x} Y{y} Z-2 R{} F300\nG80\n", 1 + next(3)),
+                5 => format!("G0 X{x} Y{y} Z5\nG33.1 Z-3 K1\n"),
+                6 => format!("G4 P0.0{}\n", 1 + next(9)),
+                7 => "M5\nM3 S600\n".into(),
+                _ => format!("G0 X{x} Y{y} Z{z}\n"),
+            });
+        }
+        text.push_str("M5\nM2\n");
+        let mut m = nc_engine::Machine::new("linuxcnc").unwrap();
+        m.params.set("nc.trajectory_planner", None, 209.0).unwrap();
+        m.params.set("nc.period_us", None, 1000.0).unwrap();
+        let prog = m.parse(&text).unwrap();
+        let inputs = match case % 3 {
+            0 => InputSchedule::default(),
+            1 => InputSchedule::default()
+                .at(200_000 + next(2_000_000), Input::FeedHold)
+                .at(3_000_000, Input::CycleStart),
+            _ => {
+                let mut s = InputSchedule::default().at(0, Input::SingleBlock(true));
+                for k in 1..60 {
+                    s = s.at(k * 700_000, Input::CycleStart);
+                }
+                s
+            }
+        };
+        let opts = RunOptions { inputs, time_limit_us: 120_000_000, ..RunOptions::default() };
+        let trace = m.run_to_trace(&prog, &opts);
+        assert_eq!(check(&trace, &Limits::of(&m), None), vec![], "case {case}:\n{text}");
+    }
+}

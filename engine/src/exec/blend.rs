@@ -156,7 +156,12 @@ pub fn blend_arc(
     // second move stop by its end.
     let reach = (v0 * v0 + 2.0 * a1 * (len1 - trim).max(0.0)).sqrt();
     let stop = (2.0 * a2 * (len2 - trim).max(0.0)).sqrt();
-    let v = v_plan.min(v1max.max(v2max)).min(reach).min(stop);
+    // Run at one speed, the arc is no faster than either move may go (the planner's final speed
+    // of a segment is the lower of its own and the next one's target speed).
+    let v = v_plan.min(v1max.min(v2max)).min(reach).min(stop);
+    if v.is_nan() || v <= 0.0 {
+        return None;
+    }
     let normal = sub(u2, u1);
     let normal = scale(normal, 1.0 / norm(normal).max(1e-30));
     let center = add(p1, scale(normal, radius / theta.sin()));

@@ -30,6 +30,9 @@ use crate::trace::AXES;
 /// or an o-word line, are looked through).
 const LOOK_AHEAD_BLOCKS: usize = 16;
 
+/// The slowest blend arc run, nm/µs (1 mm/s): below it the moves stop at the corner instead.
+const MIN_ARC_SPEED: f64 = 1.0;
+
 /// What a step is to LinuxCNC's planner queue.
 enum Queue {
     /// Enters it as a move that the present move's end condition is decided against.
@@ -78,43 +81,52 @@ impl Exec<'_> {
     }
 
     /// The move that follows the present one in the planner's queue, if one does before any queue
-    /// buster: looks through the steps queued, then reads blocks ahead (kept in `ahead` until
-    /// their turn).
-    /// With it, the blend tolerance it gets (the path mode's changes on the way).
+    /// buster, with the blend tolerance it gets (`upcoming_moves`).
     fn next_move(&mut self) -> Option<(Step, f64)> {
-        let mut tol = self.path_tolerance;
-        for s in &self.steps {
-            match queue_of(s) {
-                Queue::Move => return Some((s.clone(), tol)),
-                Queue::Buster => return None,
-                Queue::Quiet => {
-                    if let Step::PathMode { tolerance_nm, .. } = s {
-                        tol = *tolerance_nm as f64;
-                    }
+        self.upcoming_moves(1).pop().map(|(s, tol, _)| (s, tol))
+    }
+
+    /// Up to `n` moves that follow the present one in the planner's queue before any queue
+    /// buster, each with the blend tolerance and the path mode (G64) it is queued with: looks
+    /// through the steps queued, then reads blocks ahead (kept in `ahead` until their turn).
+    fn upcoming_moves(&mut self, n: usize) -> Vec<(Step, f64, bool)> {
+        let mut out = Vec::new();
+        let (mut tol, mut cont) = (self.path_tolerance, self.path_continuous);
+        // Each step in order: Some(true) to stop looking.
+        let mut take = |s: &Step, out: &mut Vec<(Step, f64, bool)>| match queue_of(s) {
+            Queue::Move => {
+                out.push((s.clone(), tol, cont));
+                out.len() >= n
+            }
+            Queue::Buster => true,
+            Queue::Quiet => {
+                if let Step::PathMode { tolerance_nm, continuous } = s {
+                    tol = *tolerance_nm as f64;
+                    cont = *continuous;
                 }
+                false
+            }
+        };
+        for s in &self.steps {
+            if take(s, &mut out) {
+                return out;
             }
         }
         for k in 0..LOOK_AHEAD_BLOCKS {
             if k == self.ahead.len() {
-                let block = self.program.blocks.get(self.pc + k)?;
-                let mut out = Vec::new();
-                let read = self.interp.block(block, &mut out).map(|()| out);
-                self.ahead.push_back(read);
+                let Some(block) = self.program.blocks.get(self.pc + k) else { return out };
+                let mut read = Vec::new();
+                let r = self.interp.block(block, &mut read).map(|()| read);
+                self.ahead.push_back(r);
             }
-            let Ok(steps) = &self.ahead[k] else { return None };
+            let Ok(steps) = &self.ahead[k] else { return out };
             for s in steps {
-                match queue_of(s) {
-                    Queue::Move => return Some((s.clone(), tol)),
-                    Queue::Buster => return None,
-                    Queue::Quiet => {
-                        if let Step::PathMode { tolerance_nm, .. } = s {
-                            tol = *tolerance_nm as f64;
-                        }
-                    }
+                if take(s, &mut out) {
+                    return out;
                 }
             }
         }
-        None
+        out
     }
 
     /// LinuxCNC 2.9's G64 rapid (DEC-164): when the next move in the queue is a rapid that turns
@@ -139,20 +151,40 @@ impl Exec<'_> {
         let acc: [f64; AXES] = std::array::from_fn(|i| {
             rate[i] / self.cfg.rapid_ramp_us[i].max(1) as f64 * if scale > 0.0 { scale } else { 1.0 }
         });
-        let next = if self.path_continuous && !self.single_block {
-            match self.next_move() {
-                Some((Step::Rapid { target: p2 }, tol2)) if (3..AXES).all(|i| p2[i] == target[i]) => {
-                    Some((p2, tol2))
-                }
-                _ => None,
-            }
-        } else {
-            None
+        let ahead =
+            if self.path_continuous && !self.single_block { self.upcoming_moves(2) } else { Vec::new() };
+        let same_plane = |q: &Pos| (3..AXES).all(|i| q[i] == target[i]);
+        let next = match ahead.first() {
+            Some((Step::Rapid { target: p2 }, tol2, _)) if same_plane(p2) => Some((*p2, *tol2)),
+            _ => None,
         };
         let tol1 = self.path_tolerance;
-        let arc = next.and_then(|(p2, tol2)| {
+        let mut arc = next.and_then(|(p2, tol2)| {
             blend::blend_arc([p0, p1, f(p2)], nominal, v0, rate, acc, [tol1, tol2]).map(|a| (a, p2))
         });
+        // The arc's speed lets the next rapid slow down to the arc after it, if one follows
+        // (the planner's backward pass over its queue, tp.c `tpRunOptimization`).
+        // (An arc joins the next rapid to the one after it when the next is queued under G64.)
+        let next_continuous = ahead.first().is_some_and(|m| m.2);
+        if let (Some((a1, p2)), Some((Step::Rapid { target: p3 }, tol3, _)), true) =
+            (arc.as_mut(), ahead.get(1), next_continuous)
+        {
+            let (q2, q3) = (f(*p2), f(*p3));
+            let len2 = ((q2[0] - p1[0]).powi(2) + (q2[1] - p1[1]).powi(2) + (q2[2] - p1[2]).powi(2)).sqrt();
+            let tol2 = next.map_or(0.0, |n| n.1);
+            // As the next rapid will plan it: from the arc's end at the arc's speed, its nominal
+            // length the whole move.
+            if let Some(a2) = blend::blend_arc([a1.end, q2, q3], len2, a1.v, rate, acc, [tol2, *tol3]) {
+                let u2 = [(q2[0] - p1[0]) / len2, (q2[1] - p1[1]) / len2, (q2[2] - p1[2]) / len2];
+                let a_2 = blend::along(u2, [acc[0], acc[1], acc[2]]);
+                let room = (len2 - a1.trim - a2.trim).max(0.0);
+                a1.v = a1.v.min((a2.v * a2.v + 2.0 * a_2 * room).sqrt());
+            }
+        }
+        // An arc that would have to be taken at (almost) no speed is no arc: the rapids stop.
+        if arc.as_ref().is_some_and(|(a, _)| a.v < MIN_ARC_SPEED) {
+            arc = None;
+        }
         if arc.is_none() && v0 <= 0.0 {
             return false;
         }
