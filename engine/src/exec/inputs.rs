@@ -198,11 +198,12 @@ impl Exec<'_> {
             }
             // A coordinated rapid (LinuxCNC's G0, one straight line, LCNC-MOT-01): the lowest
             // rapid acceleration of the axes that have one.
-            Some(Path::Line { .. } | Path::Bend { .. })
-                if matches!(self.motion_step, Some(crate::plan::Step::Rapid { .. })) =>
-            {
+            Some(Path::Line { .. }) if matches!(self.motion_step, Some(crate::plan::Step::Rapid { .. })) => {
                 rapid(&|_| true)
             }
+            // LinuxCNC 2.9's blend arc slows along itself at its tangential acceleration, half of
+            // what its plane allows (its normal acceleration takes the rest; DEC-164).
+            Some(Path::Bend { .. }) => 0.5 * rapid(&|_| true),
             Some(_) => feed,
             None => 0.0,
         }
