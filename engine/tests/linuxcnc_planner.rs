@@ -272,8 +272,8 @@ fn random_g64_programs_keep_the_physics_under_2_9_s_planner() {
         let mut text = String::from("G21 G90 G17\nM3 S800\n");
         for _ in 0..10 {
             let (x, y, z) = (next(40) as f64 - 20.0, next(40) as f64 - 20.0, next(20) as f64);
-            text.push_str(&match next(12) {
-                0 => format!("G1 X{x} Y{y} Z{z} F{}\n", 100 + next(900)),
+            text.push_str(&match next(14) {
+                0 | 12 | 13 => format!("G1 X{x} Y{y} Z{z} F{}\n", 100 + next(2900)),
                 1 => "G61.1\n".into(),
                 2 => format!("G64 P{}\n", next(5) as f64 * 0.05),
                 3 => "G64\n".into(),

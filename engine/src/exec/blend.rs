@@ -92,7 +92,8 @@ fn inscribed(n: [f64; 3], bound: [f64; 3]) -> f64 {
 /// The blend arc LinuxCNC 2.9 puts at the corner `p1` between the rapid `p0 → p1` (`[p0, p1, p2]`) (of nominal
 /// length `nominal1`: its length before an earlier arc took its start) and the rapid `p1 → p2`,
 /// with the axes' rapid rates `rate` (nm/µs) and accelerations `acc` (nm/µs²); the first move
-/// enters at `v0`; `tolerance` the moves' blend tolerances (G64 P, 0: none). None where 2.9 makes no arc (a reversal, a straight or nearly straight
+/// enters at `v0`; `tolerance` the moves' blend tolerances (G64 P, 0: none); `req` the speeds the
+/// two moves ask for (infinite for a rapid: its maximum) with the top of the feed override. None where 2.9 makes no arc (a reversal, a straight or nearly straight
 /// continuation, a move of no length).
 pub fn blend_arc(
     [p0, p1, p2]: [[f64; 3]; 3],
@@ -101,6 +102,7 @@ pub fn blend_arc(
     rate: [f64; AXES],
     acc: [f64; AXES],
     tolerance: [f64; 2],
+    (req, feed_scale): ([f64; 2], f64),
 ) -> Option<Arc3> {
     let (rate, acc) = ([rate[0], rate[1], rate[2]], [acc[0], acc[1], acc[2]]);
     let (d1, d2) = (sub(p1, p0), sub(p2, p1));
@@ -115,9 +117,13 @@ pub fn blend_arc(
         return None;
     }
     let (v1max, v2max) = (along(u1, rate), along(u2, rate));
+    // The speeds the moves ask for (a rapid: its maximum), and the fastest the planner may see
+    // them asked with the feed override at its top (tc.c `tcGetMaxTargetVel`).
+    let goal1 = (req[0] * feed_scale).min(v1max);
+    let goal2 = (req[1] * feed_scale).min(v2max);
     let (a1, a2) = (along(u1, acc), along(u2, acc));
     // A kink small enough: joined tangentially (the speed change taken in one servo period).
-    let a_inst = v1max.min(v2max) / 1000.0 + a2;
+    let a_inst = goal1.min(goal2) / 1000.0 + a2;
     let kink = (0..3).map(|i| (a_inst * (u2[i] - u1[i])).abs() / acc[i].max(1e-30)).fold(0.0, f64::max);
     if kink < KINK_RATIO {
         return None;
@@ -141,7 +147,7 @@ pub fn blend_arc(
     let vm2 = v2max.min(v1max / phi_eff.cos());
     let base = norm(sub(scale(u2, vm2), scale(u1, vm1)));
     let v_alt = if base > 0.0 { vm1 * vm2 * phi.sin() / base } else { 0.0 };
-    let v_goal = v1max.max(v2max).min(v_alt.max(inscribed(n, rate)));
+    let v_goal = goal1.max(goal2).min(v_alt.max(inscribed(n, rate)));
     let v_plan = (a_n * r_geom).sqrt().min(v_goal);
     // The radius a parabolic blend at a/2 reaching v_plan would take, over the arc's angle.
     let a_par = 0.5 * a_max;
@@ -158,7 +164,7 @@ pub fn blend_arc(
     let stop = (2.0 * a2 * (len2 - trim).max(0.0)).sqrt();
     // Run at one speed, the arc is no faster than either move may go (the planner's final speed
     // of a segment is the lower of its own and the next one's target speed).
-    let v = v_plan.min(v1max.min(v2max)).min(reach).min(stop);
+    let v = v_plan.min(v1max.min(v2max)).min(req[0].min(req[1])).min(reach).min(stop);
     if v.is_nan() || v <= 0.0 {
         return None;
     }
@@ -190,6 +196,7 @@ mod tests {
             rate,
             acc,
             [0.0, 0.0],
+            ([f64::INFINITY; 2], 1.0),
         )
         .expect("an arc");
         assert!((a.radius / mm - 2.329).abs() < 0.01, "R {}", a.radius / mm);
@@ -214,10 +221,13 @@ mod tests {
         let acc = [508e-6; AXES];
         let (p0, p1, p2) = ([0.0; 3], [10.0 * mm, 6.0 * mm, 5.0 * mm], [10.0 * mm, 2.0 * mm, 5.0 * mm]);
         let nominal = norm(p1);
-        let tight = blend_arc([p0, p1, p2], nominal, 0.0, rate, acc, [25_400.0, 0.0]).expect("an arc");
+        let tight =
+            blend_arc([p0, p1, p2], nominal, 0.0, rate, acc, [25_400.0, 0.0], ([f64::INFINITY; 2], 1.0))
+                .expect("an arc");
         assert!(tight.v > 3.0 && tight.v < 4.0, "{} mm/s", tight.v);
         assert!(tight.radius < 0.03 * mm, "R {}", tight.radius / mm);
-        let free = blend_arc([p0, p1, p2], nominal, 0.0, rate, acc, [0.0, 0.0]).expect("an arc");
+        let free = blend_arc([p0, p1, p2], nominal, 0.0, rate, acc, [0.0, 0.0], ([f64::INFINITY; 2], 1.0))
+            .expect("an arc");
         assert!((free.v - 21.5).abs() < 0.2 && (free.radius / mm - 1.05).abs() < 0.01, "{free:?}");
     }
 
@@ -226,8 +236,17 @@ mod tests {
         let rate = [30.48; AXES];
         let acc = [508e-6; AXES];
         let z = |v: f64| [0.0, 0.0, v * 1e6];
-        assert_eq!(blend_arc([z(0.0), z(5.0), z(1.0)], 5e6, 0.0, rate, acc, [0.0; 2]), None);
-        assert_eq!(blend_arc([z(0.0), z(5.0), z(9.0)], 5e6, 0.0, rate, acc, [0.0; 2]), None);
-        assert_eq!(blend_arc([z(0.0), z(5.0), z(5.0)], 5e6, 0.0, rate, acc, [0.0; 2]), None);
+        assert_eq!(
+            blend_arc([z(0.0), z(5.0), z(1.0)], 5e6, 0.0, rate, acc, [0.0; 2], ([f64::INFINITY; 2], 1.0)),
+            None
+        );
+        assert_eq!(
+            blend_arc([z(0.0), z(5.0), z(9.0)], 5e6, 0.0, rate, acc, [0.0; 2], ([f64::INFINITY; 2], 1.0)),
+            None
+        );
+        assert_eq!(
+            blend_arc([z(0.0), z(5.0), z(5.0)], 5e6, 0.0, rate, acc, [0.0; 2], ([f64::INFINITY; 2], 1.0)),
+            None
+        );
     }
 }

@@ -65,7 +65,15 @@ impl Exec<'_> {
         let nominal =
             ((joint[0] - p0[0]).powi(2) + (joint[1] - p0[1]).powi(2) + (joint[2] - p0[2]).powi(2)).sqrt();
         let tol = self.path_tolerance;
-        let arc = blend::blend_arc([p0, joint, end], nominal, 0.0, rate, acc, [tol, tol])?;
+        let arc = blend::blend_arc(
+            [p0, joint, end],
+            nominal,
+            0.0,
+            rate,
+            acc,
+            [tol, tol],
+            ([f64::INFINITY; 2], 1.0),
+        )?;
         let d2 = [end[0] - joint[0], end[1] - joint[1], end[2] - joint[2]];
         let len2 = (d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]).sqrt();
         let along2 = d2[p.along].abs();

@@ -23,7 +23,7 @@ use super::motion::Path;
 use super::profile::Profile;
 use super::{blend, Exec};
 use crate::alarm::Alarm;
-use crate::plan::{Pos, Step};
+use crate::plan::{Feed, Pos, Step};
 use crate::trace::AXES;
 
 /// Blocks read ahead at most to find the next move (blocks that queue nothing, such as `G91`
@@ -129,71 +129,101 @@ impl Exec<'_> {
         out
     }
 
-    /// LinuxCNC 2.9's G64 rapid (DEC-164): when the next move in the queue is a rapid that turns
-    /// off this one's line, the two are joined by a blend arc (`blend::blend_arc`): this rapid
-    /// runs to the arc's start and reaches it at the arc's speed, the arc runs before the next
-    /// rapid (`start_blend_arc`), which starts at its end at that speed. A rapid entered from an
-    /// arc starts at the arc's speed. False: an ordinary rapid (any other planner, or nothing to
-    /// blend and no speed to enter with).
-    pub(super) fn start_blended_rapid(&mut self, target: Pos, scale: f64) -> bool {
+    /// LinuxCNC 2.9's G64 rapid or feed (DEC-164): when the next move in the queue is of the same
+    /// kind (a rapid after a rapid, a feed per minute after one) and turns off this one's line,
+    /// the two are joined by a blend arc (`blend::blend_arc`): this move runs to the arc's start
+    /// and reaches it at the arc's speed, the arc runs before the next move (`start_blend_arc`),
+    /// which starts at its end at that speed. A move entered from an arc starts at the arc's
+    /// speed. `feed`: the feed of a feed move (None: a rapid). False: an ordinary move (any other
+    /// planner, or nothing to blend and no speed to enter with).
+    pub(super) fn start_blended_line(&mut self, target: Pos, scale: f64, feed: Option<Feed>) -> bool {
         let entry = self.entry.take();
         if !self.cfg.parabolic_half_accel || !self.cfg.coordinated_rapid {
             return false;
         }
+        // A feed per minute at a feed override that acts (per revolution, dry run, a tapping
+        // cycle's locked overrides or 0 % are left to the ordinary feed).
+        let v_feed = match feed {
+            None => None,
+            Some(Feed::PerMin(f))
+                if !self.dry_run
+                    && !self.hold_suppressed
+                    && !self.override_locked
+                    && self.feed_override > 0 =>
+            {
+                Some(f * self.feed_override as f64 / 100.0 / 60e6)
+            }
+            Some(_) => return false,
+        };
         let f = |p: Pos| [p[0] as f64, p[1] as f64, p[2] as f64];
         let (p0, p1) = (f(self.cmd), f(target));
         if (3..AXES).any(|i| target[i] != self.cmd[i]) {
             return false;
         }
         let len = ((p1[0] - p0[0]).powi(2) + (p1[1] - p0[1]).powi(2) + (p1[2] - p0[2]).powi(2)).sqrt();
+        if len <= 0.0 {
+            return false;
+        }
         let (v0, nominal) = entry.unwrap_or((0.0, len));
         let rate = self.cfg.rapid_nm_min.map(|r| r / 60e6);
-        let acc: [f64; AXES] = std::array::from_fn(|i| {
-            rate[i] / self.cfg.rapid_ramp_us[i].max(1) as f64 * if scale > 0.0 { scale } else { 1.0 }
-        });
+        let scale = if scale > 0.0 { scale } else { 1.0 };
+        let acc: [f64; AXES] =
+            std::array::from_fn(|i| rate[i] / self.cfg.rapid_ramp_us[i].max(1) as f64 * scale);
         let ahead =
             if self.path_continuous && !self.single_block { self.upcoming_moves(2) } else { Vec::new() };
         let same_plane = |q: &Pos| (3..AXES).all(|i| q[i] == target[i]);
-        let next = match ahead.first() {
-            Some((Step::Rapid { target: p2 }, tol2, _)) if same_plane(p2) => Some((*p2, *tol2)),
+        // The next move of the same kind, with the speed it asks for (a rapid: its maximum).
+        let kin = |s: &Step| match (s, v_feed) {
+            (Step::Rapid { target }, None) => Some((*target, f64::INFINITY)),
+            (Step::Feed { target, feed: Feed::PerMin(fr) }, Some(_)) => {
+                Some((*target, fr * self.feed_override as f64 / 100.0 / 60e6))
+            }
             _ => None,
         };
+        let next = ahead.first().and_then(|(s, tol2, _)| kin(s).map(|(p2, r2)| (p2, r2, *tol2)));
+        let next = next.filter(|n| same_plane(&n.0));
+        let req1 = v_feed.unwrap_or(f64::INFINITY);
+        let feed_scale = if v_feed.is_some() { self.cfg.overrides.feed_max_pct as f64 / 100.0 } else { 1.0 };
         let tol1 = self.path_tolerance;
-        let mut arc = next.and_then(|(p2, tol2)| {
-            blend::blend_arc([p0, p1, f(p2)], nominal, v0, rate, acc, [tol1, tol2]).map(|a| (a, p2))
+        let mut arc = next.and_then(|(p2, r2, tol2)| {
+            blend::blend_arc([p0, p1, f(p2)], nominal, v0, rate, acc, [tol1, tol2], ([req1, r2], feed_scale))
+                .map(|a| (a, p2))
         });
-        // The arc's speed lets the next rapid slow down to the arc after it, if one follows
-        // (the planner's backward pass over its queue, tp.c `tpRunOptimization`).
-        // (An arc joins the next rapid to the one after it when the next is queued under G64.)
+        // The arc's speed lets the next move slow down to the arc after it, if one follows (the
+        // planner's backward pass over its queue, tp.c `tpRunOptimization`), when the next move
+        // is queued under G64.
         let next_continuous = ahead.first().is_some_and(|m| m.2);
-        if let (Some((a1, p2)), Some((Step::Rapid { target: p3 }, tol3, _)), true) =
-            (arc.as_mut(), ahead.get(1), next_continuous)
+        let after = ahead.get(1).and_then(|m| kin(&m.0).map(|(p3, r3)| (p3, r3, m.1)));
+        if let (Some((a1, p2)), Some(n), Some((p3, r3, tol3)), true) =
+            (arc.as_mut(), next, after, next_continuous)
         {
-            let (q2, q3) = (f(*p2), f(*p3));
+            let (q2, q3) = (f(*p2), f(p3));
             let len2 = ((q2[0] - p1[0]).powi(2) + (q2[1] - p1[1]).powi(2) + (q2[2] - p1[2]).powi(2)).sqrt();
-            let tol2 = next.map_or(0.0, |n| n.1);
-            // As the next rapid will plan it: from the arc's end at the arc's speed, its nominal
+            // As the next move will plan it: from the arc's end at the arc's speed, its nominal
             // length the whole move.
-            if let Some(a2) = blend::blend_arc([a1.end, q2, q3], len2, a1.v, rate, acc, [tol2, *tol3]) {
+            let tols = [n.2, tol3];
+            if let Some(a2) =
+                blend::blend_arc([a1.end, q2, q3], len2, a1.v, rate, acc, tols, ([n.1, r3], feed_scale))
+            {
                 let u2 = [(q2[0] - p1[0]) / len2, (q2[1] - p1[1]) / len2, (q2[2] - p1[2]) / len2];
-                let a_2 = blend::along(u2, [acc[0], acc[1], acc[2]]);
+                let a_2 = self.line_accel(u2, &acc, v_feed.is_some(), 1.0);
                 let room = (len2 - a1.trim - a2.trim).max(0.0);
                 a1.v = a1.v.min((a2.v * a2.v + 2.0 * a_2 * room).sqrt());
             }
         }
-        // An arc that would have to be taken at (almost) no speed is no arc: the rapids stop.
+        // An arc that would have to be taken at (almost) no speed is no arc: the moves stop.
         if arc.as_ref().is_some_and(|(a, _)| a.v < MIN_ARC_SPEED) {
             arc = None;
         }
         if arc.is_none() && v0 <= 0.0 {
             return false;
         }
-        if len <= 0.0 {
-            return false;
-        }
         let u = [(p1[0] - p0[0]) / len, (p1[1] - p0[1]) / len, (p1[2] - p0[2]) / len];
-        let (vmax, amax) =
-            (blend::along(u, [rate[0], rate[1], rate[2]]), blend::along(u, [acc[0], acc[1], acc[2]]));
+        let mut vmax = blend::along(u, [rate[0], rate[1], rate[2]]);
+        if let Some(v) = v_feed {
+            vmax = vmax.min(v).min(self.cfg.feed_max_nm_min / 60e6);
+        }
+        let amax = self.line_accel(u, &acc, v_feed.is_some(), scale);
         let (end, dist, v1) = match &arc {
             Some((a, _)) => {
                 let mut end = self.cmd;
@@ -205,11 +235,13 @@ impl Exec<'_> {
             None => (target, len, 0.0),
         };
         let profile = Profile::between(dist.max(0.0), v0, vmax, v1, amax, self.cfg.period_us);
-        // Backlash is the joints' business (as `start_rapid`); the directions are kept.
-        for i in 0..3 {
-            let d = target[i] - self.cmd[i];
-            if d != 0 {
-                self.backlash(i, d.signum() as i8);
+        if feed.is_none() {
+            // Backlash is the joints' business (as `start_rapid`); the directions are kept.
+            for i in 0..3 {
+                let d = target[i] - self.cmd[i];
+                if d != 0 {
+                    self.backlash(i, d.signum() as i8);
+                }
             }
         }
         self.start_motion(end, Path::Line { profile, len: dist.max(0.0) });
@@ -222,10 +254,20 @@ impl Exec<'_> {
         true
     }
 
-    /// Runs the blend arc planned by the rapid before (`start_blended_rapid`) ahead of the rapid
-    /// to `target`, which is put back to start from the arc's end at its speed. False: no arc is
-    /// pending for this rapid.
-    pub(super) fn start_blend_arc(&mut self, target: Pos) -> bool {
+    /// The acceleration of a straight move along `u`: a rapid's from the axes' (`acc`, already
+    /// scaled), a feed's the cutting acceleration × `scale` (as `feed_profile`).
+    fn line_accel(&self, u: [f64; 3], acc: &[f64; AXES], feed: bool, scale: f64) -> f64 {
+        if feed {
+            self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64 * scale
+        } else {
+            blend::along(u, [acc[0], acc[1], acc[2]])
+        }
+    }
+
+    /// Runs the blend arc planned by the move before (`start_blended_line`) ahead of the move
+    /// `step` (a rapid or a feed to `target`), which is put back to start from the arc's end at
+    /// its speed. False: no arc is pending for this move.
+    pub(super) fn start_blend_arc(&mut self, step: &Step, target: Pos) -> bool {
         let Some(b) = self.blend.take() else { return false };
         if b.next_target != target {
             return false;
@@ -240,7 +282,7 @@ impl Exec<'_> {
         let path =
             Path::Bend { profile, len, center: a.center, u: a.u, w: a.w, radius: a.radius, sweep: a.sweep };
         self.start_motion(end, path);
-        self.steps.push_front(Step::Rapid { target });
+        self.steps.push_front(step.clone());
         self.entry = Some((a.v, b.nominal2));
         true
     }

@@ -154,17 +154,24 @@ impl Exec<'_> {
             Step::Rapid { target } => {
                 // Under G96 the speed for the end point, from the start of the rapid (DEC-66).
                 self.css_follow(target[0]);
-                if self.start_blend_arc(target) {
+                if self.start_blend_arc(&Step::Rapid { target }, target) {
                     return;
                 }
                 let scale = self.planner_accel_scale();
-                if !self.start_blended_rapid(target, scale) {
+                if !self.start_blended_line(target, scale, None) {
                     self.start_rapid(target, scale)
                 }
             }
             Step::Feed { target, feed } => {
-                let len = path_len(&self.cmd, &target);
+                // LinuxCNC 2.9's blend arcs between G64 feeds (DEC-164).
+                if self.start_blend_arc(&Step::Feed { target, feed }, target) {
+                    return;
+                }
                 let scale = self.planner_accel_scale();
+                if self.start_blended_line(target, scale, Some(feed)) {
+                    return;
+                }
+                let len = path_len(&self.cmd, &target);
                 if let Some(profile) = self.feed_profile(len, feed, scale) {
                     self.start_motion(target, Path::Line { profile, len });
                 }
