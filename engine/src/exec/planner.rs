@@ -12,10 +12,10 @@
 //! coolant or tool command, a dwell, a stop, the program end). LinuxCNC fixed it after 2.9
 //! (#4220: half acceleration only during an actual blend), which the default follows.
 //!
-//! Two G64 rapids that turn are joined by 2.9's blend arc (`blend.rs`, DEC-164; a thread pass and
-//! its exit taper: `pass_blend.rs`). Not modelled (L-124): arcs between feeds, lines and arcs,
-//! and 2.9's parabolic blend (`tpDoParabolicBlending`): such a pair stops exactly here, at full
-//! acceleration.
+//! Two G64 rapids, or two G64 feeds per minute, that turn are joined by 2.9's blend arc
+//! (`blend.rs`, DEC-164; a thread pass and its exit taper: `pass_blend.rs`). Not modelled (L-124):
+//! arcs to or from G2/G3 and 2.9's parabolic blend (`tpDoParabolicBlending`): such a pair stops
+//! exactly here, at full acceleration.
 
 use std::collections::VecDeque;
 
