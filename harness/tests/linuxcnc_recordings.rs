@@ -81,16 +81,22 @@ fn the_2_9_planner_is_what_makes_the_g64_recordings_conformant() {
     }
 }
 
-/// `debian-2.9-g64/g64_mix` (recorded alone in a fresh LinuxCNC 2.9 session for DEC-164): G64
-/// feeds turning 90° at F600 and three rapids turning up, across and down, joined by blend arcs,
-/// conformant under 2.9's planner (rms 0.014 mm), up to 3.95 mm outside the band without it.
+/// `debian-2.9-g64` (each recorded alone in a fresh LinuxCNC 2.9 session for DEC-164): g64_mix,
+/// G64 feeds turning 90° at F600 and three rapids turning up, across and down, joined by blend
+/// arcs (rms 0.014 mm; up to 3.95 mm outside the band without 2.9's planner); g64_tolerance,
+/// corners after a canned cycle (the 0.001 inch it leaves: 5.19 mm/s, 0.026 mm from the corner),
+/// under G64 P0.5 (23.04 mm/s, 0.5 mm) and under G64 (30.48 mm/s, 0.965 mm): conformant under
+/// 2.9's planner, not without it.
 #[test]
-fn g64_feed_corners_and_a_chain_of_rapid_arcs_are_2_9_s() {
-    let (program, trace) = ("programs/g64_mix.ngc", "recordings/debian-2.9-g64/csv/g64_mix.csv");
-    let (code, text) = check_with(program, "linuxcnc-sim-2.9.params.yaml", trace);
-    assert_eq!(code, 0, "{text}");
-    let (code, text) = check_with(program, "linuxcnc-sim.params.yaml", trace);
-    assert_eq!(code, 1, "{text}");
+fn g64_corners_and_their_tolerances_are_2_9_s() {
+    for name in ["g64_mix", "g64_tolerance"] {
+        let (program, trace) =
+            (format!("programs/{name}.ngc"), format!("recordings/debian-2.9-g64/csv/{name}.csv"));
+        let (code, text) = check_with(&program, "linuxcnc-sim-2.9.params.yaml", &trace);
+        assert_eq!(code, 0, "{name}: {text}");
+        let (code, text) = check_with(&program, "linuxcnc-sim.params.yaml", &trace);
+        assert_eq!(code, 1, "{name}: {text}");
+    }
 }
 
 fn check(set: &str, name: &str) -> (i32, String) {
