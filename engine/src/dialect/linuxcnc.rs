@@ -13,6 +13,7 @@ mod eval;
 mod interp;
 mod machine;
 mod ngc;
+mod path_mode;
 
 use super::common::rows::*;
 use crate::dialect::{Dialect, Interpreter};

@@ -124,7 +124,7 @@ pub struct Cfg {
     overshoot_pitches: f64,
     /// LinuxCNC 2.9's planner (`nc.trajectory_planner` 209): the path control mode is passed on
     /// to the executor (`Step::PathMode`, DEC-163).
-    tp_2_9: bool,
+    pub(super) tp_2_9: bool,
 }
 
 impl Cfg {
@@ -277,16 +277,6 @@ impl Machine {
         }
     }
 
-    /// Tells the executor the path control mode from here on, with the planner's blend
-    /// tolerance (only for LinuxCNC 2.9's planner, whose half acceleration and blend arcs
-    /// depend on them: DEC-163, DEC-164).
-    pub fn path_mode(&self, continuous: bool, out: &mut Vec<Step>) {
-        if self.cfg.tp_2_9 {
-            let tolerance_nm = if continuous { self.tolerance } else { 0 };
-            out.push(Step::PathMode { continuous, tolerance_nm });
-        }
-    }
-
     /// Appends a rapid and moves there.
     pub fn rapid(&mut self, target: Pos, out: &mut Vec<Step>) {
         out.push(Step::Rapid { target });
@@ -433,22 +423,7 @@ impl Machine {
                 410 | 420 => self.comp = true,
                 900 => self.absolute = true,
                 910 => self.absolute = false,
-                610 | 611 => {
-                    // emccanon.cc SET_MOTION_CONTROL_MODE keeps the tolerance given (0 here).
-                    self.continuous = false;
-                    self.canon_tolerance = 0;
-                    self.path_mode(false, out);
-                }
-                640 => {
-                    let p = match b.get('P') {
-                        Some(p) if p > 0.0 => self.len(p, 2, b, 'P')?,
-                        _ => 0,
-                    };
-                    self.continuous = true;
-                    self.tolerance = p;
-                    self.canon_tolerance = p;
-                    self.path_mode(true, out);
-                }
+                610 | 611 | 640 => self.control_mode(g, b, out)?,
                 901 => self.arc_absolute = true,
                 911 => self.arc_absolute = false,
                 980 => self.old_z = true,
