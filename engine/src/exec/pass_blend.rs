@@ -15,7 +15,7 @@
 use super::blend::{self, Arc3};
 use super::motion::Path;
 use super::Exec;
-use crate::plan::{PassLaw, Step, ThreadPass};
+use crate::plan::{PassLaw, Pos, Step, ThreadPass};
 use crate::units::{Micros, Nm};
 
 /// Most servo periods a blended taper may take (a safety bound; a few hundred in practice).
@@ -44,14 +44,15 @@ fn f3(p: &[Nm]) -> [f64; 3] {
 impl Exec<'_> {
     /// For LinuxCNC 2.9's planner under G64, a pass whose thread is followed by one exit taper:
     /// the pass split so that the thread ends at the blend arc's start at speed, the taper
-    /// step then running the arc and the taper (`start_pass_blend`). None: split as DEC-147.
-    pub(super) fn plan_pass_blend(&mut self, p: &ThreadPass) -> Option<Pos3Target> {
+    /// step then running the arc and the taper (`start_pass_blend`); returns the arc's start,
+    /// where the thread ends. None: split as DEC-147.
+    pub(super) fn plan_pass_blend(&mut self, p: &ThreadPass) -> Option<Pos> {
         if !self.cfg.parabolic_half_accel || !self.path_continuous || p.n != 3 || p.along > 2 || p.across > 2
         {
             return None;
         }
-        // The thread proper first (no infeed along it), then the taper.
-        if p.knots[0].1 != p.knots[1].1 && (p.knots[0].1 - self.cmd[p.across] as f64).abs() > 1.0 {
+        // The thread proper first (no infeed along it from where the tool stands), then the taper.
+        if (p.knots[1].1 - self.cmd[p.across] as f64).abs() > 1.0 {
             return None;
         }
         let p0 = f3(&self.cmd);
@@ -185,12 +186,9 @@ impl Exec<'_> {
     }
 }
 
-/// Where the thread of a blended pass ends: the arc's start.
-pub(super) type Pos3Target = crate::plan::Pos;
-
 /// The steps of a blended pass: the thread to the arc's start (accelerated, ending at speed),
 /// then the taper step that runs the arc and the taper.
-pub(super) fn blended_steps(p: &ThreadPass, trim: crate::plan::Pos) -> [Step; 2] {
+pub(super) fn blended_steps(p: &ThreadPass, trim: Pos) -> [Step; 2] {
     let mut thread = *p;
     thread.target = trim;
     thread.knots = [p.knots[0], (trim[p.along] as f64, p.knots[1].1), (0.0, 0.0), (0.0, 0.0)];
