@@ -16,7 +16,14 @@ fn data() -> PathBuf {
 
 /// Recordings known to diverge (set/name), each with its reason: a ratchet, taken off the list
 /// when it becomes conformant.
-const EXPECTED_DIVERGENT: [(&str, &str); 2] = [
+const EXPECTED_DIVERGENT: [(&str, &str); 3] = [
+    (
+        "debian-2.9-g64/g64_arcs",
+        "2.9 joins a G64 line to a G2 and the G2 to the next line with blend arcs (tp.c \
+         tpCreateLineArcBlend, tpCreateArcLineBlend), not modelled (L-124): the reference stops at \
+         both corners, X 0.0007 mm outside the band at 2853 ms, and the rapid up after the last line \
+         starts later, Z 0.196 mm outside at 4010 ms (recorded times)",
+    ),
     (
         "debian-2.9-exact-stop/g84_g18_g61_1",
         "the permuted G18 G84 feed points of debian-2.9/g84_g18, under exact stop too (DEC-84)",
