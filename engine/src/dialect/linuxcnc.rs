@@ -13,6 +13,7 @@ mod eval;
 mod interp;
 mod machine;
 mod ngc;
+mod path_mode;
 
 use super::common::rows::*;
 use crate::dialect::{Dialect, Interpreter};
@@ -36,6 +37,7 @@ static AXES: [AxisSpec; 3] = [
 /// Parameters of `linuxcnc`: the project's shared `nc.*` / `plc.*` model (LinuxCNC's INI
 /// settings have no numbers; DEC-80).
 pub static PARAMS: &[ParamDef] = &[
+    num("nc.trajectory_planner", "LinuxCNC trajectory planner", Int, 209.0, 210.0, 210.0, "", "Which LinuxCNC's G64 planner the motion follows: 210 (default), LinuxCNC 2.10 as modelled so far (every move ends at rest at its full acceleration: DEC-141); 209, LinuxCNC 2.9: a G64 move that no move follows in the planner's queue runs at half its acceleration (tc.c tcGetOverallMaxAccel, fixed after 2.9 by LinuxCNC #4220; DEC-163), and two G64 rapids or feeds that turn, or a G76 pass and its exit taper, are joined by its blend arc (tp.c tpCreateLineLineBlend; DEC-164)."),
     num("nc.rigid_overshoot_pitches", "G33.1 overshoot allowance", Real, 0.1, 100.0, 10.0, "pitches", "How far past the end point the G33.1 tap may follow the reversing spindle, in pitches (LinuxCNC: 10); beyond: NC-1097."),
     ParamDef { doc: "Servo period: 1000, 2000, 4000 or 8000 (LinuxCNC SERVO_PERIOD).", ..PERIOD_US },
     ParamDef { doc: "Rapid rate per axis (MAX_VELOCITY).", ..RAPID_MM_MIN },
@@ -82,6 +84,7 @@ impl Dialect for Linuxcnc {
         // another line, and only the commands of moves carry a line (LCNC-INP-01, L-121).
         c.step_stops_before_motion = true;
         c.index_latency_periods = 1;
+        c.parabolic_half_accel = p.get("nc.trajectory_planner") < 209.5;
         c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {

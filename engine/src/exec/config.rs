@@ -89,6 +89,13 @@ pub struct PlantConfig {
     /// copies the pin into its status after its planner has run, so the planner sees the index
     /// in the second period after it; tp.c tpCheckAtSpeed, control.c; DEC-157).
     pub index_latency_periods: u32,
+    /// LinuxCNC 2.9's trajectory planner (`nc.trajectory_planner` 209, DEC-163): under G64
+    /// (`Step::PathMode`), a rapid, line or arc after which no move enters the planner's queue
+    /// (the next command waits for the motion to end: a rigid tap, a spindle or coolant command,
+    /// a dwell, a stop, the program end) keeps its parabolic end condition and runs at half its
+    /// acceleration for its whole length (tc.c `tcGetOverallMaxAccel`). False: every move at its
+    /// full acceleration (LinuxCNC 2.10, and any move that stops exactly).
+    pub parabolic_half_accel: bool,
     /// The PLC ladder.
     pub plc: PlcConfig,
     /// The override switches' ranges and steps.

@@ -161,6 +161,7 @@ impl Exec<'_> {
                 self.steps.push_front(s);
             }
         }
+        self.drop_blend();
         self.hold_requested = true;
     }
 
@@ -200,6 +201,9 @@ impl Exec<'_> {
             Some(Path::Line { .. }) if matches!(self.motion_step, Some(crate::plan::Step::Rapid { .. })) => {
                 rapid(&|_| true)
             }
+            // LinuxCNC 2.9's blend arc slows along itself at its tangential acceleration, half of
+            // what its plane allows (its normal acceleration takes the rest; DEC-164).
+            Some(Path::Bend { .. }) => 0.5 * rapid(&|_| true),
             Some(_) => feed,
             None => 0.0,
         }

@@ -6,11 +6,14 @@
 //! of a step). The CNC acts on interpolation-period ticks; the PLC and drive ([`plc`]) answer
 //! after their own delays.
 
+mod blend;
 pub mod config;
 mod css;
 mod follow;
 mod inputs;
 pub mod motion;
+mod pass_blend;
+mod planner;
 mod plc;
 pub mod profile;
 mod resync;
@@ -155,6 +158,18 @@ pub(crate) struct Exec<'a> {
     /// A spindle start has been commanded since the last cutting move: the next one waits for the
     /// spindle at speed (`PlantConfig::feed_waits_at_speed`), through `Step::AwaitAtSpeed`.
     atspeed_next_feed: bool,
+    /// LinuxCNC's path control mode is G64 (`Step::PathMode`; LinuxCNC powers on in it).
+    path_continuous: bool,
+    /// The blend tolerance the planner gives the moves from here on, nm (0: none; `Step::PathMode`).
+    path_tolerance: f64,
+    /// Blocks the planner has read ahead of their turn (`planner.rs`), read from here first.
+    ahead: planner::Ahead,
+    /// LinuxCNC 2.9's blend arc planned to run before the next rapid (`planner.rs`, DEC-164).
+    blend: Option<planner::PendingBlend>,
+    /// The speed (nm/µs) and nominal length (nm) the next rapid enters with, after a blend arc.
+    entry: Option<(f64, f64)>,
+    /// LinuxCNC 2.9's blend arc between a G64 thread pass and its exit taper (`pass_blend.rs`).
+    pass_blend: Option<pass_blend::PassBlend>,
 }
 
 /// Runs `program` on `machine`, streaming the trace into `sink`.
@@ -245,6 +260,12 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         coast: None,
         follow_v: None,
         atspeed_next_feed: false,
+        path_continuous: true,
+        path_tolerance: 0.0,
+        ahead: planner::Ahead::new(),
+        blend: None,
+        entry: None,
+        pass_blend: None,
     };
     ex.main_loop();
 }

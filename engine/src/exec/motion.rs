@@ -58,6 +58,34 @@ pub enum Path {
         /// Spindle direction, +1 forward.
         spin: f64,
     },
+    /// A circular arc through X, Y and Z in any plane (LinuxCNC 2.9's blend arc between two moves,
+    /// tp.c `tpCreateLineLineBlend`, DEC-164): the point at `s` along it is
+    /// `center + radius·(cos φ·u + sin φ·w)`, φ = `sweep`·s/`len`; other axes stay.
+    Bend {
+        /// Path profile.
+        profile: Profile,
+        /// Arc length, nm.
+        len: f64,
+        /// Centre (X, Y, Z), nm.
+        center: [f64; 3],
+        /// Unit vector from the centre to the start.
+        u: [f64; 3],
+        /// Unit vector in the arc's plane, perpendicular to `u`, towards the travel.
+        w: [f64; 3],
+        /// Radius, nm.
+        radius: f64,
+        /// Angle swept, rad (> 0).
+        sweep: f64,
+    },
+    /// Positions given every `step` µs from the start (X, Y, Z, nm; other axes stay), linear in
+    /// between: a motion whose law is worked out period by period when it starts (LinuxCNC 2.9's
+    /// synchronised blend arc and taper, tracking the spindle: `exec/pass_blend.rs`, DEC-164).
+    Track {
+        /// Time between two points, µs.
+        step: Micros,
+        /// The points, the first where the motion starts.
+        points: Vec<[f64; 3]>,
+    },
     /// A spindle-synchronised thread pass: the drive axis travels as `profile` gives (locked
     /// to the spindle after its catch-up ramp, or reaching lead × speed: `exec/thread.rs`); the
     /// infeed axis is a function of that travel through the knots; other axes move linearly
@@ -136,8 +164,10 @@ impl Motion {
     pub fn duration(&self) -> Micros {
         match &self.path {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.total).max().unwrap_or(0),
+            Path::Track { step, points } => *step * points.len().saturating_sub(1) as Micros,
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
+            | Path::Bend { profile, .. }
             | Path::Tap { profile, .. }
             | Path::Thread { profile, .. } => profile.total,
         }
@@ -202,8 +232,19 @@ impl Motion {
         let dt = t.saturating_sub(self.t0);
         match &self.path {
             Path::Rapid { profiles, .. } => profiles.iter().map(|p| p.eval(dt).1).fold(0.0, f64::max),
+            Path::Track { step, points } => {
+                let k = (dt / (*step).max(1)) as usize;
+                match (points.get(k), points.get(k + 1)) {
+                    (Some(a), Some(b)) => {
+                        let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+                        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() / (*step).max(1) as f64
+                    }
+                    _ => 0.0,
+                }
+            }
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
+            | Path::Bend { profile, .. }
             | Path::Tap { profile, .. }
             | Path::Thread { profile, .. } => profile.eval(dt).1,
         }
@@ -220,8 +261,21 @@ impl Motion {
                     *p = p.stop_from(dt, a, period);
                 }
             }
+            Path::Track { step, points } => {
+                // Stops at the next point (a synchronised move has no hold of its own): the
+                // points before now are dropped, the motion's start moves to the first kept.
+                let st = (*step).max(1);
+                let k = ((dt / st) as usize).min(points.len().saturating_sub(1));
+                points.truncate(k + 2);
+                points.drain(..k);
+                self.t0 += k as Micros * st;
+                let end = self.t0 + self.duration();
+                self.target = self.pos_unclamped(end);
+                return;
+            }
             Path::Line { profile, .. }
             | Path::Arc { profile, .. }
+            | Path::Bend { profile, .. }
             | Path::Tap { profile, .. }
             | Path::Thread { profile, .. } => *profile = profile.stop_from(dt, a, period),
         }
@@ -267,6 +321,23 @@ impl Motion {
                 let r = radius + (radius_end - radius) * f;
                 p[i0] = round_i64(center[0] + r * libm::cos(a));
                 p[i1] = round_i64(center[1] + r * libm::sin(a));
+            }
+            Path::Track { step, points } => {
+                let k = (dt / (*step).max(1)) as usize;
+                let f = (dt - k as Micros * *step) as f64 / (*step).max(1) as f64;
+                if let Some(a) = points.get(k) {
+                    let b = points.get(k + 1).unwrap_or(a);
+                    for i in 0..3 {
+                        p[i] = round_i64(a[i] + (b[i] - a[i]) * f);
+                    }
+                }
+            }
+            Path::Bend { profile, len, center, u, w, radius, sweep } => {
+                let phi = sweep * profile.eval(dt).0 / len.max(1.0);
+                let (c, sn) = (libm::cos(phi), libm::sin(phi));
+                for i in 0..3 {
+                    p[i] = round_i64(center[i] + radius * (c * u[i] + sn * w[i]));
+                }
             }
             Path::Tap { profile, axis, backlash, .. } => {
                 let d = m.target[*axis] - m.start[*axis];

@@ -3,6 +3,7 @@
 
 use crate::units::{ceil_to, Micros};
 
+mod between;
 mod catch_up;
 mod follow;
 mod track;
@@ -157,7 +158,7 @@ impl Profile {
     }
 
     /// The speed at the very end of the profile, nm/µs (0 unless it ends at speed).
-    fn end_speed(&self) -> f64 {
+    pub fn end_speed(&self) -> f64 {
         let p = &self.pieces[self.n.max(1) - 1];
         (p.v0 + p.a * (self.total as f64 - p.t0)).max(0.0)
     }

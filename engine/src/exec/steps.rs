@@ -72,7 +72,15 @@ impl Exec<'_> {
         self.cur_line = Some(block.line);
         let (line, text) = (block.line, block.text.clone());
         let mut out = Vec::new();
-        let read = self.interp.block(block, &mut out);
+        // A block read ahead by the planner (`planner.rs`) was interpreted then.
+        let read = match self.ahead.pop_front() {
+            Some(Ok(steps)) => {
+                out = steps;
+                Ok(())
+            }
+            Some(Err(a)) => Err(a),
+            None => self.interp.block(block, &mut out),
+        };
         if read.is_ok() && self.stops_before(&out) {
             self.step_done = false;
             self.held_block = Some((line, text));
@@ -146,11 +154,25 @@ impl Exec<'_> {
             Step::Rapid { target } => {
                 // Under G96 the speed for the end point, from the start of the rapid (DEC-66).
                 self.css_follow(target[0]);
-                self.start_rapid(target)
+                if self.start_blend_arc(&Step::Rapid { target }, target) {
+                    return;
+                }
+                let scale = self.planner_accel_scale();
+                if !self.start_blended_line(target, scale, None) {
+                    self.start_rapid(target, scale)
+                }
             }
             Step::Feed { target, feed } => {
+                // LinuxCNC 2.9's blend arcs between G64 feeds (DEC-164).
+                if self.start_blend_arc(&Step::Feed { target, feed }, target) {
+                    return;
+                }
+                let scale = self.planner_accel_scale();
+                if self.start_blended_line(target, scale, Some(feed)) {
+                    return;
+                }
                 let len = path_len(&self.cmd, &target);
-                if let Some(profile) = self.feed_profile(len, feed) {
+                if let Some(profile) = self.feed_profile(len, feed, scale) {
                     self.start_motion(target, Path::Line { profile, len });
                 }
             }
@@ -273,6 +295,10 @@ impl Exec<'_> {
             Step::Alarm(a) => self.raise(a),
             Step::Report(a) => self.report(a),
             Step::Halt => self.halt(),
+            Step::PathMode { continuous, tolerance_nm } => {
+                self.path_continuous = continuous;
+                self.path_tolerance = tolerance_nm as f64;
+            }
         }
     }
 
@@ -286,8 +312,9 @@ impl Exec<'_> {
         self.active = Active::Held;
     }
 
-    /// The profile of a cutting feed move of `len` nm (COM-MOT-02); None after raising 0011.
-    fn feed_profile(&mut self, len: f64, feed: Feed) -> Option<Profile> {
+    /// The profile of a cutting feed move of `len` nm (COM-MOT-02) at `scale` × the cutting
+    /// acceleration (`Exec::planner_accel_scale`); None after raising 0011.
+    fn feed_profile(&mut self, len: f64, feed: Feed, scale: f64) -> Option<Profile> {
         let nm_per_min = match feed {
             Feed::PerMin(f) => f,
             Feed::PerRev(f) => f * self.spindle.at(self.now).1.abs(),
@@ -308,7 +335,7 @@ impl Exec<'_> {
             v = self.cfg.dry_run_nm_min * ovr / 100.0;
         }
         let vmax = self.cfg.feed_max_nm_min / 60e6;
-        let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64;
+        let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64 * scale;
         // Per revolution while the spindle changes speed: F x the actual speed throughout.
         if let (Feed::PerRev(f), false, Some(ramp)) = (feed, dry, self.spindle.ramp(self.now)) {
             let per_rpm = f * ovr / 100.0 / 60e6;
@@ -324,7 +351,12 @@ impl Exec<'_> {
         Some(Profile::trapezoid(len, (v / 60e6).min(vmax), a, self.cfg.period_us))
     }
 
-    fn start_rapid(&mut self, target: Pos) {
+    /// A rapid to `target`, at `scale` × the axes' acceleration (`Exec::planner_accel_scale`).
+    fn start_rapid(&mut self, target: Pos, scale: f64) {
+        let ramp_us =
+            self.cfg
+                .rapid_ramp_us
+                .map(|r| if scale == 1.0 { r } else { (r as f64 / scale).round() as Micros });
         if self.cfg.coordinated_rapid {
             // One straight line (LinuxCNC); backlash is the joints' business, not the path's.
             for i in 0..AXES {
@@ -334,12 +366,8 @@ impl Exec<'_> {
                 }
             }
             let delta = std::array::from_fn(|i| (target[i] - self.cmd[i]) as f64);
-            let path = super::motion::coordinated_rapid(
-                delta,
-                self.cfg.rapid_nm_min,
-                self.cfg.rapid_ramp_us,
-                self.cfg.period_us,
-            );
+            let path =
+                super::motion::coordinated_rapid(delta, self.cfg.rapid_nm_min, ramp_us, self.cfg.period_us);
             self.start_motion(target, path);
             return;
         }
@@ -352,7 +380,7 @@ impl Exec<'_> {
             }
             let b = self.backlash(i, d.signum() as i8);
             let v = self.cfg.rapid_nm_min[i] / 60e6;
-            let a = v / self.cfg.rapid_ramp_us[i].max(1) as f64;
+            let a = v / ramp_us[i].max(1) as f64;
             profiles[i] = Profile::trapezoid(d.abs() as f64 + b, v, a, self.cfg.period_us);
             backlash[i] = b;
         }
@@ -404,7 +432,8 @@ impl Exec<'_> {
         }
         let h = (target[i2] - s[i2]) as f64;
         let len = libm::hypot(0.5 * (radius + radius_end) * sweep.abs(), h);
-        if let Some(profile) = self.feed_profile(len, feed) {
+        let scale = self.planner_accel_scale();
+        if let Some(profile) = self.feed_profile(len, feed, scale) {
             self.start_motion(
                 target,
                 Path::Arc { profile, len, center: c, radius, radius_end, a0, sweep, plane },

@@ -22,23 +22,27 @@ use crate::units::{ceil_to, Micros, Nm};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct SyncLock {
     /// The spindle's angle when the pass started, deg (unwrapped).
-    angle0: f64,
+    pub(super) angle0: f64,
     /// The sense the spindle turns (±1).
-    sign: f64,
+    pub(super) sign: f64,
     /// The drive axis' position when the pass started, nm.
-    along0: Nm,
+    pub(super) along0: Nm,
     /// The sense the drive axis travels (±1).
-    dir: f64,
+    pub(super) dir: f64,
     /// Lead, nm per revolution.
-    lead: f64,
+    pub(super) lead: f64,
     /// How far the ramp left the axis behind the spindle, nm (v²/2a).
-    lag: f64,
+    pub(super) lag: f64,
 }
 
 impl Exec<'_> {
     /// Starts a thread pass, or waits first (for the spindle's speed change to end, for the start
     /// angle).
     pub(super) fn start_thread(&mut self, p: ThreadPass) {
+        // LinuxCNC 2.9 under G64: the taper of a blended pass runs its arc first (DEC-164).
+        if self.start_pass_blend(&p) {
+            return;
+        }
         if p.law == PassLaw::Segments && p.n > 2 {
             self.thread_segments(p);
             return;
@@ -151,7 +155,12 @@ impl Exec<'_> {
                     lead,
                     lag: v * v / (2.0 * accel),
                 });
-                Profile::thread(dist, v, accel, period, now % period)
+                if let Some(v_arc) = self.pass_blend_entry() {
+                    // The thread of a blended pass runs on into its arc at speed (DEC-164).
+                    Profile::between(dist, 0.0, v, v.min(v_arc), accel, period)
+                } else {
+                    Profile::thread(dist, v, accel, period, now % period)
+                }
             }
         };
         let (knots, blend) = super::motion::blended(&knots[..p.n], p.thread, v_top, blend_a);
@@ -179,6 +188,12 @@ impl Exec<'_> {
     /// A pass through tapers as LinuxCNC runs it (DEC-147): one synchronised segment per pair of
     /// knots, each ending at rest; the first waits for the index and ramps, the others track.
     fn thread_segments(&mut self, p: ThreadPass) {
+        if let Some(trim) = self.plan_pass_blend(&p) {
+            for s in super::pass_blend::blended_steps(&p, trim).into_iter().rev() {
+                self.steps.push_front(s);
+            }
+            return;
+        }
         for k in (0..p.n - 1).rev() {
             let mut target = p.target;
             if k + 2 < p.n {

@@ -293,6 +293,16 @@ pub enum Step {
     /// The run ends here on the alarm already reported by a [`Step::Report`] (end reason
     /// `alarm`, no second alarm).
     Halt,
+    /// LinuxCNC's path control mode from here on: `continuous` under G64 (the planner may blend
+    /// a move's end), false under G61 and G61.1 and inside a canned cycle (rs274 runs a cycle's
+    /// moves in G61). Emitted only for LinuxCNC 2.9's planner (`nc.trajectory_planner` 209),
+    /// whose half acceleration it decides (`PlantConfig::parabolic_half_accel`, DEC-163).
+    PathMode {
+        /// G64.
+        continuous: bool,
+        /// The blend tolerance the planner gives the moves from here on, nm (G64 P; 0: none).
+        tolerance_nm: Nm,
+    },
     /// An axis locked to a spindle in speed mode (the spindle leads, the axis follows its
     /// encoder): see [`Follow`].
     Follow(Follow),

@@ -113,6 +113,9 @@ pub fn canned(m: &mut Machine, g: u32, b: &Eb, out: &mut Vec<Step>) -> Result<()
         current_cc = r;
     }
     let clear = if m.old_z { old_cc } else { r };
+    // rs274 runs the cycle's moves in G61 (interp_cycles.cc convert_cycle: after the rapid up to
+    // R, SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH), the mode in force restored at its end).
+    m.path_mode(false, out);
     for n in 0..repeats {
         aa = aa.saturating_add(inc[0]);
         bb = bb.saturating_add(inc[1]);
@@ -128,6 +131,12 @@ pub fn canned(m: &mut Machine, g: u32, b: &Eb, out: &mut Vec<Step>) -> Result<()
         }
         body.emit(m, ic, at(m, aa, bb, r), bottom, clear, out);
     }
+    // Restored with canon's tolerance (GET_EXTERNAL_MOTION_CONTROL_TOLERANCE): 0.001 inch until
+    // a G64 gives one, though the planner had none before (L-124, DEC-164).
+    if m.continuous {
+        m.tolerance = m.canon_tolerance;
+    }
+    m.path_mode(m.continuous, out);
     out.push(Step::Phase(Phase::Idle));
     m.cyc.cc = cc_word;
     m.cyc.r = r_word;

@@ -98,7 +98,7 @@ enum Queued {
 fn queued_as(s: &Step) -> Queued {
     match s {
         Step::Feed { .. } => Queued::Feed,
-        Step::Phase(_) | Step::HoldSuppress(_) => Queued::Quiet,
+        Step::Phase(_) | Step::HoldSuppress(_) | Step::PathMode { .. } => Queued::Quiet,
         _ => Queued::Flush,
     }
 }

@@ -122,6 +122,9 @@ pub struct CycleMemo {
 pub struct Cfg {
     max_rpm: f64,
     overshoot_pitches: f64,
+    /// LinuxCNC 2.9's planner (`nc.trajectory_planner` 209): the path control mode is passed on
+    /// to the executor (`Step::PathMode`, DEC-163).
+    pub(super) tp_2_9: bool,
 }
 
 impl Cfg {
@@ -130,6 +133,7 @@ impl Cfg {
         Cfg {
             max_rpm: p.get("nc.spindle_max_rpm").max(1.0),
             overshoot_pitches: p.get("nc.rigid_overshoot_pitches"),
+            tp_2_9: p.get("nc.trajectory_planner") < 209.5,
         }
     }
 }
@@ -147,6 +151,15 @@ pub struct Machine {
     pub inch: bool,
     /// G90.
     pub absolute: bool,
+    /// G64 (LinuxCNC powers on in it, emccanon.cc INIT_CANON); false under G61 and G61.1.
+    pub continuous: bool,
+    /// The blend tolerance LinuxCNC's planner gives G64 moves, nm: 0 at start-up (none: the
+    /// planner's own limit), G64's P.
+    pub tolerance: Nm,
+    /// The tolerance LinuxCNC's canonical layer keeps, nm, which rs274 restores after a canned
+    /// cycle: 0.001 inch at start-up (emccanon.cc INIT_CANON, never sent to the planner), the
+    /// last G64's P, 0 after G61 or G61.1.
+    pub canon_tolerance: Nm,
     /// G90.1: arc centres absolute.
     pub arc_absolute: bool,
     /// G7.
@@ -190,6 +203,9 @@ impl Machine {
             off: [0; 3],
             inch: false,
             absolute: true,
+            continuous: true,
+            tolerance: 0,
+            canon_tolerance: 25_400,
             arc_absolute: false,
             diameter: false,
             plane: Plane::Xy,
@@ -407,6 +423,7 @@ impl Machine {
                 410 | 420 => self.comp = true,
                 900 => self.absolute = true,
                 910 => self.absolute = false,
+                610 | 611 | 640 => self.control_mode(g, b, out)?,
                 901 => self.arc_absolute = true,
                 911 => self.arc_absolute = false,
                 980 => self.old_z = true,
