@@ -146,7 +146,8 @@ class Adapter:
         if req.get("dialect") != "linuxcnc":
             return {"ok": False, "unsupported": f"LinuxCNC does not run {req.get('dialect')}"}
         try:
-            ini, hal, cfg = lcnc_machine.machine_config(req.get("params", []), self.args.path_mode, self.args.planner)
+            ini, hal, cfg = lcnc_machine.machine_config(req.get("params", []), self.args.path_mode, self.args.planner,
+                                                        lcnc_machine.planner_of(linuxcnc_version()))
         except lcnc_machine.NotApplicable as e:
             return {"ok": False, "unsupported": f"not applicable: {e}"}
         self.ensure_instance(ini, hal)

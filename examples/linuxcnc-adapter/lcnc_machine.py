@@ -48,6 +48,7 @@ DEFAULTS = {
     "plc.fin_fall_ms": 0.0,
     "plc.fin_timeout_ms": 10000.0,
     "plc.zsp_ms": 8.0,
+    "nc.trajectory_planner": 210.0,
 }
 PER_AXIS = {"nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm"}
 AXES = "XYZ"
@@ -131,7 +132,20 @@ def num(x):
     return s if s not in ("", "-0") else "0"
 
 
-def machine_config(params, path_mode="G64", planner="default"):
+def planner_of(version):
+    """The `nc.trajectory_planner` a LinuxCNC version runs (DEC-163): 209 for 2.9 (its G64
+    planner halves the acceleration of a move no move follows, blends with its arcs), 210 for
+    2.10 and later; None for a version not recognised."""
+    m = re.match(r"^(?:\d+:)?(\d+)\.(\d+)", version or "")
+    if not m:
+        return None
+    major, minor = int(m.group(1)), int(m.group(2))
+    if (major, minor) < (2, 9):
+        return None
+    return 209.0 if (major, minor) == (2, 9) else 210.0
+
+
+def machine_config(params, path_mode="G64", planner="default", runs_planner=None):
     """(ini_text, hal_text, cfg) for the parameters; cfg holds what the agent and the trace need
     (servo period, override limits, zero-speed time, the power-on path mode). Raises NotApplicable.
     `path_mode`: LinuxCNC's default G64 (blending), G61 (exact path) or G61.1 (exact stop).
@@ -139,8 +153,16 @@ def machine_config(params, path_mode="G64", planner="default"):
     cuts the acceleration of moves meeting at a corner by [TRAJ] ARC_BLEND_KINK_RATIO (0.1) in
     exact path mode too, and canned cycles run in exact path whatever the mode (rs274 -g:
     SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH) around a cycle; tp.c tpSetupTangent). A look-ahead
-    depth below 2 turns that off: every corner is an exact stop at full acceleration."""
+    depth below 2 turns that off: every corner is an exact stop at full acceleration.
+    `runs_planner`: the `nc.trajectory_planner` of the LinuxCNC that will run (`planner_of`): a
+    scenario whose reference is another planner is not applicable (the installed LinuxCNC cannot
+    be another version)."""
     v = resolve(params)
+    if runs_planner is not None and v["nc.trajectory_planner"] != runs_planner:
+        raise NotApplicable(
+            f"nc.trajectory_planner = {v['nc.trajectory_planner']:g}, while this LinuxCNC runs the "
+            f"planner {runs_planner:g} (DEC-163): give conform --params with nc.trajectory_planner: "
+            f"{runs_planner:g} (scripts/linuxcnc-conform does)")
     period_us = int(v["nc.period_us"])
     if period_us not in (1000, 2000, 4000, 8000):
         raise NotApplicable(f"nc.period_us = {period_us}: not a servo period of the model")

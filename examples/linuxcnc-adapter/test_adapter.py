@@ -188,6 +188,18 @@ class MachineConfig(unittest.TestCase):
         with self.assertRaises(ValueError):
             lcnc_machine.path_mode("G1")
 
+    def test_the_planner_is_the_installed_linuxcncs(self):
+        # DEC-163: Debian's 2.9.0~pre1 runs 2.9's G64 planner; a reference of another is not
+        # applicable there, the same one is
+        self.assertEqual(lcnc_machine.planner_of("2.9.0~pre1+git20230208.f1270d6ed7-1+deb12u2"), 209.0)
+        self.assertEqual(lcnc_machine.planner_of("1:2.10.0~pre0"), 210.0)
+        self.assertEqual(lcnc_machine.planner_of("2.11.1"), 210.0)
+        self.assertIsNone(lcnc_machine.planner_of("unknown"))
+        with self.assertRaises(lcnc_machine.NotApplicable) as e:
+            lcnc_machine.machine_config([], runs_planner=209.0)
+        self.assertIn("nc.trajectory_planner: 209", str(e.exception))
+        lcnc_machine.machine_config([{"id": "nc.trajectory_planner", "value": 209}], runs_planner=209.0)
+
     def test_what_linuxcnc_cannot_have_is_not_applicable(self):
         for params, says in [
             ([{"id": "nc.rapid_mm_min", "axis": "Z", "value": 3000}], "slowest axis gives 3000"),

@@ -187,3 +187,36 @@ fn run_refuses_a_parameter_file_of_another_dialect() {
         "{t}"
     );
 }
+
+/// `--params` is repeatable: a later file over an earlier (a machine's file, then the installed
+/// controller version's planner, as `scripts/linuxcnc-conform` gives them).
+#[test]
+fn a_later_parameter_file_sits_over_an_earlier() {
+    let dir = scratch("two");
+    let later = dir.join("later.yaml");
+    std::fs::write(
+        &later,
+        "dialect: linuxcnc\nparams:\n  nc.feed_ramp_ms: 150\n  nc.trajectory_planner: 209\n",
+    )
+    .unwrap();
+    let file = dir.join("machine.yaml");
+    std::fs::write(&file, SLOW).unwrap();
+    let o = Command::new(bin())
+        .current_dir(root())
+        .args(["conform", "--adapter", &proxy(&dir, "log"), "--scenarios", "scenarios/linuxcnc"])
+        .args(["--filter", TWO[0], "--params"])
+        .arg(&file)
+        .arg("--params")
+        .arg(&later)
+        .output()
+        .unwrap();
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let load: serde_json::Value = serde_json::from_str(
+        std::fs::read_to_string(dir.join("loads.jsonl")).unwrap().lines().next().unwrap(),
+    )
+    .unwrap();
+    assert_eq!(param(&load, "nc.feed_ramp_ms", None), Some(150.0), "{load}");
+    assert_eq!(param(&load, "nc.trajectory_planner", None), Some(209.0), "{load}");
+    assert_eq!(param(&load, "nc.rapid_mm_min", Some("Z")), Some(2000.0), "the first file's: {load}");
+}

@@ -53,9 +53,10 @@ pub struct ConformArgs {
     /// The machine's parameters (a parameter file, docs/parameters-format.md; for LinuxCNC the
     /// output of `nc-conform params --from-ini MACHINE.ini`) under every scenario's own: the
     /// reference runs each scenario on them and the controller is sent them in `load`. A file
-    /// naming a `dialect:` applies to that dialect's scenarios only.
+    /// naming a `dialect:` applies to that dialect's scenarios only. Repeatable: a later file
+    /// over an earlier (a machine's file, then a site's or a controller version's).
     #[arg(long, value_name = "FILE.yaml")]
-    pub params: Option<PathBuf>,
+    pub params: Vec<PathBuf>,
 
     /// Write the verdicts as JUnit XML (one test case per scenario).
     #[arg(long, value_name = "FILE.xml")]
@@ -101,7 +102,7 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
             Some(p) => crate::input::load_tolerances(p)?,
             None => crate::check::Tolerances::default(),
         },
-        params: args.params.as_deref().map(MachineParams::read).transpose()?,
+        params: args.params.iter().map(|p| MachineParams::read(p)).collect::<Result<_, _>>()?,
     };
     let mut ctl = ProcessController::new(argv, Duration::from_millis(args.timeout_ms.max(1)))
         .with_scenario_limit(Duration::from_millis(args.scenario_timeout_ms.max(1)));
@@ -109,7 +110,7 @@ fn run_inner(args: &ConformArgs) -> Result<u8, InputError> {
         .identity()
         .map_err(|e| InputError::new("--adapter", format!("the adapter cannot be greeted: {e}")))?;
     println!("{} {} (dialects: {})", id.name, id.version, id.dialects.join(", "));
-    if let Some(p) = &machine.params {
+    for p in &machine.params {
         let of = p.file.dialect.as_ref().map_or("every dialect".to_string(), |(d, _)| format!("dialect {d}"));
         println!(
             "machine parameters: {} ({} values, for {of}), under each scenario's own",

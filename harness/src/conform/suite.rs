@@ -66,7 +66,7 @@ pub fn run_one_within(
     name: &str,
     machine: &Tolerances,
 ) -> Result<ScenarioVerdict, InputError> {
-    let setup = MachineSetup { tolerances: machine.clone(), params: None };
+    let setup = MachineSetup { tolerances: machine.clone(), params: Vec::new() };
     run_one_on(ctl, dialects, path, name, &setup)
 }
 
@@ -75,9 +75,9 @@ pub fn run_one_within(
 pub struct MachineSetup {
     /// The comparison's tolerances for a scenario without a `.check.yaml` of its own.
     pub tolerances: Tolerances,
-    /// The machine's parameters, under each scenario's own: the reference runs on them and the
-    /// controller is sent them in `load`.
-    pub params: Option<load::MachineParams>,
+    /// The machine's parameter files, in order (a later file over an earlier), under each
+    /// scenario's own: the reference runs on them and the controller is sent them in `load`.
+    pub params: Vec<load::MachineParams>,
 }
 
 /// [`run_one_within`] on the machine's own parameters too (`conform --params FILE`): the
@@ -96,7 +96,7 @@ pub fn run_one_on(
 ) -> Result<ScenarioVerdict, InputError> {
     let machine = &setup.tolerances;
     let started = std::time::Instant::now();
-    let s = load::load_over(path, name, setup.params.as_ref())?;
+    let s = load::load_over(path, name, &setup.params)?;
     let dialect = s.machine.dialect.name();
     if !dialects.iter().any(|d| d == dialect) {
         let why = format!("the controller does not run dialect {dialect}");

@@ -92,16 +92,16 @@ impl MachineParams {
 ///
 /// Unreadable files, YAML errors, unknown keys, bad values, program syntax errors, each located.
 pub fn load(path: &Path, name: &str) -> Result<Scenario, InputError> {
-    load_over(path, name, None)
+    load_over(path, name, &[])
 }
 
-/// [`load`] on a machine's own parameters: `machine`'s values first (when of the scenario's
-/// dialect), the scenario's on top.
+/// [`load`] on a machine's own parameters: each file of `machine` in turn (those of the
+/// scenario's dialect, a later file over an earlier), the scenario's on top.
 ///
 /// # Errors
 ///
 /// As [`load`]; also a machine parameter the scenario's dialect refuses.
-pub fn load_over(path: &Path, name: &str, machine: Option<&MachineParams>) -> Result<Scenario, InputError> {
+pub fn load_over(path: &Path, name: &str, machine: &[MachineParams]) -> Result<Scenario, InputError> {
     let bytes = crate::input::read_capped(path, crate::input::YAML).map_err(|m| InputError::new(name, m))?;
     let text = String::from_utf8(bytes)
         .map_err(|_| InputError::new(name, "cannot read: stream did not contain valid UTF-8"))?;
@@ -118,7 +118,7 @@ pub const MAX_SAMPLES: u64 = 1_000_000;
 ///
 /// As [`load`].
 pub fn load_text(text: &str, name: &str, dir: &Path) -> Result<Scenario, InputError> {
-    load_text_over(text, name, dir, None)
+    load_text_over(text, name, dir, &[])
 }
 
 /// [`load_text`] on a machine's own parameters, as [`load_over`].
@@ -130,7 +130,7 @@ pub fn load_text_over(
     text: &str,
     name: &str,
     dir: &Path,
-    base: Option<&MachineParams>,
+    base: &[MachineParams],
 ) -> Result<Scenario, InputError> {
     let options = serde_saphyr::options! { strict_booleans: true, with_snippet: false };
     let mut file: ScenarioFile = serde_saphyr::from_str_with_options(text, options).map_err(|e| {
@@ -151,14 +151,16 @@ pub fn load_text_over(
     let settings =
         params_yaml::settings_from(text, std::mem::take(&mut file.params)).map_err(|e| at(name, text, e))?;
     let mut over_machine = Vec::new();
-    if let Some(base) = base {
-        if base.apply(&mut machine)? {
-            for st in &settings {
-                let was = machine.params.get_axis(&st.id, st.axis);
-                if machine.params.def(&st.id).is_some() && was != st.value {
-                    let axis = st.axis.map_or(String::new(), |a| format!(" {a}"));
-                    over_machine.push(format!("{}{axis} = {} (the machine's: {was})", st.id, st.value));
-                }
+    let mut applied = false;
+    for file in base {
+        applied |= file.apply(&mut machine)?;
+    }
+    if applied {
+        for st in &settings {
+            let was = machine.params.get_axis(&st.id, st.axis);
+            if machine.params.def(&st.id).is_some() && was != st.value {
+                let axis = st.axis.map_or(String::new(), |a| format!(" {a}"));
+                over_machine.push(format!("{}{axis} = {} (the machine's: {was})", st.id, st.value));
             }
         }
     }
