@@ -1,7 +1,8 @@
 //! The CSV fast path against the general parser: on random decimal strings the fast path's
 //! value is exactly `parse_f64`'s / `parse_u64`'s (or it declines), and on random files (plain,
 //! quoted, spaced, signed, exponents, empty fields, short and long rows, time going back) the
-//! importer with its fast path gives exactly the events, errors and warnings of the general path.
+//! importer with its fast path gives exactly the events, errors and warnings of the general path
+//! (and on the CSV fuzz corpus, the generated recording).
 
 use std::io::Cursor;
 
@@ -218,4 +219,17 @@ fn the_generated_recording_reads_the_same_both_ways() {
             }
         }
     }
+}
+
+#[test]
+fn the_fuzz_corpus_reads_the_same_both_ways() {
+    let map = ColumnMap::from_yaml("fuzz.yaml", crate::import::fuzz::FUZZ_MAP).expect("the fuzz map loads");
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzz/corpus/import_csv");
+    let mut n = 0;
+    for e in std::fs::read_dir(dir).expect("the corpus") {
+        let text = std::fs::read(e.expect("an entry").path()).expect("a corpus file");
+        same(&text, &map).expect("the same");
+        n += 1;
+    }
+    assert!(n >= 3);
 }
