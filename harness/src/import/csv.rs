@@ -1,7 +1,8 @@
 //! CSV importer: rows of a servo/PLC trace tool's export, read through a [`ColumnMap`] into
-//! samples and signal edges. One row at a time (memory does not grow with the file); fields are
-//! split with `memchr` and numbers parsed without allocation, so a plain row costs well under a
-//! microsecond.
+//! samples and signal edges. One row at a time (memory does not grow with the file), parsed in
+//! place in the reader's buffer; a plain row (unquoted, plain decimals) in one pass over its
+//! bytes ([`fast`]), any other through the general parser, which gives the same values and
+//! every error.
 //!
 //! A row gives one `sample` (every mapped axis and the spindle; unmapped slots are 0), then an
 //! edge for each mapped signal whose level changed, at the row's time. Before the first row every
@@ -16,6 +17,8 @@ use nc_engine::trace::{Event, Sample, Signal, TraceEvent};
 use super::map::{ColRef, ColumnMap, Level};
 use super::num::{f64_to_fixed, parse_f64, parse_u64};
 use super::{char_col, read_line, Ctx, ErrorKind, Format, ImportError, RecordedMeta, Source};
+
+pub(crate) mod fast;
 
 /// The longest line read, bytes.
 const MAX_LINE: usize = 1 << 20;
@@ -68,6 +71,15 @@ struct Rows {
     levels: Vec<bool>,
     new_levels: Vec<bool>,
     last_t: Option<u64>,
+    /// Rows are tried on the fast path first (not when the delimiter could be read as part of a
+    /// decimal, nor with `general_only`).
+    fast: bool,
+    /// The actions in column order (the order of [`Rows::row`]), each with its column.
+    flat: Vec<(usize, Action)>,
+    /// Columns with an action, by column.
+    used: Vec<bool>,
+    /// The fast path's decimals, by column.
+    decs: Vec<fast::Dec>,
 }
 
 /// Splits `line` at `delim` into `fields` (ranges of the returned bytes): `line` itself when no
@@ -313,6 +325,10 @@ pub(crate) fn open(
         first_t_us: None,
     };
     let n_sigs = sigs.len();
+    let flat: Vec<(usize, Action)> =
+        actions.iter().enumerate().flat_map(|(c, acts)| acts.iter().map(move |&a| (c, a))).collect();
+    let used: Vec<bool> = actions.iter().map(|a| !a.is_empty()).collect();
+    let fast = !ctx.general_only && !b"0123456789+-.eE\"".contains(&map.delimiter);
     let rows = Rows {
         delim: map.delimiter,
         line_no,
@@ -328,6 +344,10 @@ pub(crate) fn open(
         levels: vec![false; n_sigs],
         new_levels: vec![false; n_sigs],
         last_t: None,
+        fast,
+        flat,
+        decs: vec![fast::Dec::default(); used.len()],
+        used,
     };
     Ok((meta, Box::new(CsvSource { r, buf, rows })))
 }
@@ -475,7 +495,18 @@ impl Rows {
         }
         let mut sample = Sample::default();
         self.new_levels.copy_from_slice(&self.levels);
-        match self.row(ctx, line, &mut sample) {
+        let fast = if self.fast { self.fast_row(line, &mut sample) } else { None };
+        let res = match fast {
+            Some(t) => Ok(t),
+            None => {
+                if self.fast {
+                    sample = Sample::default();
+                    self.new_levels.copy_from_slice(&self.levels);
+                }
+                self.row(ctx, line, &mut sample)
+            }
+        };
+        match res {
             Ok(t) => {
                 self.last_t = Some(t);
                 out.push_back(TraceEvent { t_us: t, event: Event::Sample(sample) });

@@ -125,8 +125,8 @@ pub(crate) struct Ctx {
     pub file: String,
     pub lenient: bool,
     pub warnings: Warnings,
-    /// Read every JSON Lines line through serde_json (no fast path): the differential test's
-    /// reference.
+    /// Read every JSON Lines line through serde_json and every CSV row through the general
+    /// parser (no fast paths): the differential tests' reference.
     pub general_only: bool,
 }
 
@@ -243,7 +243,7 @@ pub fn from_reader(
     from_reader_with(name, reader, opts, false)
 }
 
-/// [`from_reader`], with `general_only` to read JSON Lines without its fast path.
+/// [`from_reader`], with `general_only` to read JSON Lines and CSV without their fast paths.
 pub(crate) fn from_reader_with(
     name: &str,
     mut reader: Box<dyn BufRead + Send>,
