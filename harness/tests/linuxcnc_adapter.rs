@@ -20,5 +20,5 @@ fn the_linuxcnc_adapter_maps_parameters_recordings_and_conditions() {
         .expect("python3 runs");
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{text}");
-    assert!(text.contains("Ran 38 tests"), "{text}");
+    assert!(text.contains("Ran 39 tests"), "{text}");
 }
