@@ -147,7 +147,7 @@ class Adapter:
             return {"ok": False, "unsupported": f"LinuxCNC does not run {req.get('dialect')}"}
         try:
             ini, hal, cfg = lcnc_machine.machine_config(req.get("params", []), self.args.path_mode, self.args.planner,
-                                                        lcnc_machine.planner_of(linuxcnc_version()))
+                                                        lcnc_machine.planner_of(linuxcnc_version(), self.args.planner))
         except lcnc_machine.NotApplicable as e:
             return {"ok": False, "unsupported": f"not applicable: {e}"}
         self.ensure_instance(ini, hal)

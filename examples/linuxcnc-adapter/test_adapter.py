@@ -195,6 +195,8 @@ class MachineConfig(unittest.TestCase):
         self.assertEqual(lcnc_machine.planner_of("1:2.10.0~pre0"), 210.0)
         self.assertEqual(lcnc_machine.planner_of("2.11.1"), 210.0)
         self.assertIsNone(lcnc_machine.planner_of("unknown"))
+        # the exact planner (no look-ahead) is the 210 model whatever the version
+        self.assertEqual(lcnc_machine.planner_of("2.9.0~pre1", "exact"), 210.0)
         with self.assertRaises(lcnc_machine.NotApplicable) as e:
             lcnc_machine.machine_config([], runs_planner=209.0)
         self.assertIn("nc.trajectory_planner: 209", str(e.exception))
