@@ -31,7 +31,7 @@ use crate::trace::AXES;
 const LOOK_AHEAD_BLOCKS: usize = 16;
 
 /// The slowest blend arc run, nm/µs (1 mm/s): below it the moves stop at the corner instead.
-const MIN_ARC_SPEED: f64 = 1.0;
+pub(super) const MIN_ARC_SPEED: f64 = 1.0;
 
 /// What a step is to LinuxCNC's planner queue.
 enum Queue {
@@ -89,7 +89,7 @@ impl Exec<'_> {
     /// Up to `n` moves that follow the present one in the planner's queue before any queue
     /// buster, each with the blend tolerance and the path mode (G64) it is queued with: looks
     /// through the steps queued, then reads blocks ahead (kept in `ahead` until their turn).
-    fn upcoming_moves(&mut self, n: usize) -> Vec<(Step, f64, bool)> {
+    pub(super) fn upcoming_moves(&mut self, n: usize) -> Vec<(Step, f64, bool)> {
         let mut out = Vec::new();
         let (mut tol, mut cont) = (self.path_tolerance, self.path_continuous);
         // Each step in order: Some(true) to stop looking.
@@ -189,6 +189,11 @@ impl Exec<'_> {
             blend::blend_arc([p0, p1, f(p2)], nominal, v0, rate, acc, [tol1, tol2], ([req1, r2], feed_scale))
                 .map(|a| (a, p2))
         });
+        // A feed into a G2/G3 arc: 2.9's line-to-arc blend (`arc_blend.rs`).
+        if let (None, Some(v), Some((step, tol2, _))) = (&arc, v_feed, ahead.first()) {
+            let line = (p0, p1, len, nominal, v0);
+            arc = self.line_to_arc_blend(line, step, [tol1, *tol2], v, (rate, acc), feed_scale);
+        }
         // The arc's speed lets the next move slow down to the arc after it, if one follows (the
         // planner's backward pass over its queue, tp.c `tpRunOptimization`), when the next move
         // is queued under G64.
@@ -298,9 +303,9 @@ impl Exec<'_> {
 /// A blend arc planned at the start of a rapid, to run before the next rapid.
 #[derive(Debug, Clone)]
 pub(super) struct PendingBlend {
-    arc: blend::Arc3,
+    pub(super) arc: blend::Arc3,
     /// Where the next rapid ends.
-    next_target: Pos,
+    pub(super) next_target: Pos,
     /// The next rapid's nominal length (corner to end), nm.
-    nominal2: f64,
+    pub(super) nominal2: f64,
 }
