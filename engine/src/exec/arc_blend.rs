@@ -16,7 +16,8 @@
 //! - the arc is then put tangent to the line and to the circle itself: its centre R off the line,
 //!   r + R (concave) or r − R (convex) from the circle's centre; the line loses the distance to
 //!   the arc's start, the circle the angle to the point where the two touch. A blend farther
-//!   from the corner than the tolerance is no blend (the moves stop).
+//!   from the corner than the tolerance, or taking more of the circle than its share, or a line
+//!   out of the circle's plane, is no blend (the moves stop: 2.9's parabolic blend is L-124).
 //!
 //! An arc-to-line corner is the line-to-arc corner of the path run backwards.
 
@@ -131,6 +132,11 @@ pub fn line_arc_blend(
     let t2 = if tolerance[1] > 0.0 { tolerance[1] } else { 0.25 * arc_len };
     let tol = t1.min(t2).min(q1).min(0.25 * arc_len);
     let bin = unit(cross(u1, u_tan2));
+    // Only a line in the circle's plane (tp.c: the blend's binormal colinear with the circle's
+    // normal); a line out of it (a helix-like entry, a Z move into an XY arc) stops.
+    if norm(cross(bin, g.binormal)) > 1e-6 {
+        return None;
+    }
     let a_max = inscribed(bin, acc);
     let a_n = a_max * 0.75f64.sqrt();
     let v_goal = (req * feed_scale).min(inscribed(bin, rate));
@@ -164,7 +170,8 @@ pub fn line_arc_blend(
         return None;
     }
     let circle_trim = dot(unit(rp), unit(sub(center, c))).clamp(-1.0, 1.0).acos();
-    if circle_trim >= g.angle {
+    // No more of the circle than its share (tp.c: the trim against phi2_max / phi1_max).
+    if circle_trim > phi2_max || circle_trim >= g.angle {
         return None;
     }
     let start = sub(p, scale(u1, d_l));
