@@ -286,8 +286,22 @@ fn random_g64_programs_keep_the_physics_under_2_9_s_planner() {
                     let g = if a1 < a0 { 2 } else { 3 };
                     let f = 60.0 * (300.0 * r).sqrt() * (1 + next(9)) as f64 / 10.0;
                     let (x2, y2) = (next(40) as f64 - 20.0, next(40) as f64 - 20.0);
+                    // Then a feed on, or a second circle of the same size about a centre at a
+                    // random angle from the first one's end (G2 or G3: the corner any angle).
+                    let on = if next(2) == 0 {
+                        format!("G1 X{x2} Y{y2}\n")
+                    } else {
+                        let b = (next(360) as f64).to_radians();
+                        let (dx, dy) = (r * b.cos(), r * b.sin());
+                        format!(
+                            "G{} X{:.4} Y{:.4} I{dx:.4} J{dy:.4}\n",
+                            2 + next(2),
+                            ex + 2.0 * dx,
+                            ey + 2.0 * dy
+                        )
+                    };
                     format!(
-                        "G1 X{x} Y{y} F{f:.0}\nG{g} X{ex:.4} Y{ey:.4} I{:.4} J{:.4}\nG1 X{x2} Y{y2}\n",
+                        "G1 X{x} Y{y} F{f:.0}\nG{g} X{ex:.4} Y{ey:.4} I{:.4} J{:.4}\n{on}",
                         cx - x,
                         cy - y
                     )
@@ -390,4 +404,30 @@ fn a_g64_line_and_a_g2_arc_are_joined_by_2_9_s_blend_arcs() {
             assert!(closest < 1e-6 && slowest < 1.0, "{corner:?}: {closest} mm, {slowest} mm/s");
         }
     }
+}
+
+/// Two G2/G3 arcs meeting at 90°: `G3 X30 Y0 I5 J0` (from X20) into `G2 X30 Y-10 I0 J-5` at
+/// F600, joined by 2.9's arc-to-arc blend (tp.c `tpCreateArcArcBlend`): the second circle is
+/// convex at the corner (it bends away from the turn), so θ = 45° − (π/4)/4 and the arc is the
+/// speed's: R = 12²/440 = 0.3273 mm, tangent to both circles, the corner passed at 0.1360 mm
+/// (by hand: `exec/arc_blend.rs`), at the feed. Where two arcs continue tangentially (the G2's
+/// end into the G3) there is none: they stop (2.9's tangent join is L-124).
+#[test]
+fn two_g64_arcs_that_turn_are_joined_by_2_9_s_blend_arc() {
+    let program = "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X10 F600\nG2 X20 Y0 I5 J0\nG3 X30 Y0 I5 J0\n\
+                   G2 X30 Y-10 I0 J-5\nG1 X0 Y-10\nM2\n";
+    let t = run(209.0, program);
+    let (closest, slowest) = pass_by(&t, (30.0, 0.0));
+    assert!((closest - 0.1360).abs() < 0.003, "{closest} mm");
+    assert!(slowest > 9.9, "{slowest} mm/s");
+    let (closest, slowest) = pass_by(&t, (20.0, 0.0));
+    assert!(closest < 0.001 && slowest < 1.0, "{closest} mm, {slowest} mm/s");
+    // Through the corner the centripetal 10²/0.3273 = 306 mm/s², within √¾ of 508.
+    let (x, y) = (axis(&t, 0), axis(&t, 1));
+    let acc = accel_magnitudes(&t);
+    let peak =
+        (1..x.len() - 1).filter(|&k| (x[k] - 30.0).hypot(y[k]) < 1.0).map(|k| acc[k - 1]).fold(0.0, f64::max);
+    assert!((peak - 305.5).abs() < 10.0 && peak < 440.0, "{peak} mm/s²");
+    let after = run(210.0, program);
+    assert!(pass_by(&after, (30.0, 0.0)).0 < 0.001);
 }

@@ -57,6 +57,144 @@ fn inscribed(n: [f64; 3], bound: [f64; 3]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// The blend's radius, its planned speed and the plane's acceleration (blendmath.c
+/// `blendParamKinematics` and `blendComputeParameters` with arcs: no altitude rule): from the half
+/// angle `theta`, the lengths each move may give up, the tolerance, the plane's normal `bin`, the
+/// axes' bounds and the fastest speed asked (with the feed override at its top). None: too small.
+fn radius_and_speed(
+    theta: f64,
+    [l1, l2]: [f64; 2],
+    tol: f64,
+    bin: [f64; 3],
+    (rate, acc): ([f64; 3], [f64; 3]),
+    v_goal: f64,
+) -> Option<(f64, f64, f64)> {
+    let phi = std::f64::consts::PI - 2.0 * theta;
+    let a_max = inscribed(bin, acc);
+    let a_n = a_max * 0.75f64.sqrt();
+    let v_goal = v_goal.min(inscribed(bin, rate));
+    let d_tol = theta.cos() * tol / (1.0 - theta.sin());
+    let d_geom = l1.min(l2).min(d_tol);
+    let r_geom = theta.tan() * d_geom;
+    let v_plan = (a_n * r_geom).sqrt().min(v_goal);
+    let a_par = 0.5 * a_max;
+    let t_blend = (2.0 * a_par * d_geom).sqrt().min(v_plan) / a_par;
+    let r_blend = (t_blend * v_plan / phi).min(r_geom);
+    let big_r = (v_plan * v_plan / a_n).max(r_blend);
+    (big_r > 1.0 && v_plan > 0.0 && big_r.is_finite()).then_some((big_r, v_plan, a_max))
+}
+
+/// A circle of a G2/G3 at the corner (nm): centre, radius, the unit normal its travel turns about
+/// counterclockwise, and the angle it has (unsigned, rad).
+#[derive(Debug, Clone, Copy)]
+pub struct Circle {
+    /// Centre.
+    pub center: [f64; 3],
+    /// Radius.
+    pub radius: f64,
+    /// Unit normal of its plane, the travel turning about it counterclockwise.
+    pub binormal: [f64; 3],
+    /// Its angle, rad.
+    pub angle: f64,
+}
+
+/// The blend 2.9 puts between two G2/G3 circles meeting at `corner` (tp.c `tpCreateArcArcBlend`,
+/// blendmath.c `blendInit3FromArcArc`, `blendArcArcPostProcess`): θ from the two tangents, each
+/// circle convex or concave there as against a line, the first giving up at most two thirds of its
+/// angle, the second a third (and θ when convex, else a quarter turn); no blend below θ = 15°, for
+/// circles in different planes, or concentric; the arc tangent to both (its centre r1 ± R from the
+/// first centre, r2 ± R from the second, on the side of the turn). The arc's `trim` is 0: the
+/// angles taken off the circles are returned, the first's and the second's.
+pub fn arc_arc_blend(
+    corner: [f64; 3],
+    [c1, c2]: [Circle; 2],
+    (rate, acc): ([f64; 3], [f64; 3]),
+    tolerance: [f64; 2],
+    req: f64,
+    feed_scale: f64,
+) -> Option<(Arc3, [f64; 2])> {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let p = corner;
+    if !(c1.radius > 1.0 && c2.radius > 1.0 && c1.angle > 0.0 && c2.angle > 0.0) {
+        return None;
+    }
+    if norm(cross(c1.binormal, c2.binormal)) > 1e-6 {
+        return None;
+    }
+    let (rp1, rp2) = (sub(p, c1.center), sub(p, c2.center));
+    let u_tan1 = unit(cross(c1.binormal, rp1));
+    let u_tan2 = unit(cross(c2.binormal, rp2));
+    let theta_tan = 0.5 * (-dot(u_tan1, u_tan2)).clamp(-1.0, 1.0).acos();
+    if FRAC_PI_2 - theta_tan < 1e-6 || theta_tan < 1e-6 {
+        return None;
+    }
+    let bin = unit(cross(u_tan1, u_tan2));
+    if norm(cross(bin, c1.binormal)) > 1e-6 {
+        return None;
+    }
+    let normal = unit(sub(u_tan2, u_tan1));
+    let convex1 = dot(rp1, u_tan2) < 0.0;
+    let convex2 = dot(rp2, u_tan1) >= 0.0;
+    let phi1_max = (c1.angle * 2.0 / 3.0).min(if convex1 { theta_tan } else { FRAC_PI_2 });
+    let phi2_max = (c2.angle / 3.0).min(if convex2 { theta_tan } else { FRAC_PI_2 });
+    let mut theta = theta_tan;
+    if convex1 {
+        theta = theta.min(theta_tan - phi1_max / 4.0);
+    }
+    if convex2 {
+        theta = theta.min(theta_tan - phi2_max / 4.0);
+    }
+    if theta < PI / 12.0 {
+        return None;
+    }
+    let l1 = if convex1 { (phi1_max / 4.0).sin() * c1.radius } else { phi1_max * c1.radius };
+    let l2 = if convex2 { (phi2_max / 4.0).sin() * c2.radius } else { phi2_max * c2.radius };
+    let (q1, q2) = (0.25 * c1.radius * c1.angle, 0.25 * c2.radius * c2.angle);
+    let t1 = if tolerance[0] > 0.0 { tolerance[0] } else { q1 };
+    let t2 = if tolerance[1] > 0.0 { tolerance[1] } else { q2 };
+    let tol = t1.min(t2).min(q1).min(q2);
+    let (big_r, v_plan, a_max) = radius_and_speed(theta, [l1, l2], tol, bin, (rate, acc), req * feed_scale)?;
+    // The centre r1 ± R from the first circle's, r2 ± R from the second's, on the turn's side.
+    let d1 = if convex1 { c1.radius - big_r } else { c1.radius + big_r };
+    let d2 = if convex2 { c2.radius - big_r } else { c2.radius + big_r };
+    let c12 = sub(c2.center, c1.center);
+    let dc = norm(c12);
+    if dc < 1.0 {
+        return None;
+    }
+    let cx = (d1 * d1 - d2 * d2 + dc * dc) / (2.0 * dc);
+    let cy2 = d1 * d1 - cx * cx;
+    if cy2.is_nan() || cy2 < 0.0 {
+        return None;
+    }
+    let uc = scale(c12, 1.0 / dc);
+    let mut nc = unit(cross(bin, uc));
+    if dot(normal, nc) < 0.0 {
+        nc = scale(nc, -1.0);
+    }
+    let base = add(c1.center, scale(uc, cx));
+    let (ca, cb) = (add(base, scale(nc, cy2.sqrt())), sub(base, scale(nc, cy2.sqrt())));
+    let center = if norm(sub(cb, p)) < norm(sub(ca, p)) { cb } else { ca };
+    if norm(sub(center, p)) - big_r > tol {
+        return None;
+    }
+    let trim = |c: &Circle, rp: [f64; 3]| dot(unit(rp), unit(sub(center, c.center))).clamp(-1.0, 1.0).acos();
+    let (trim1, trim2) = (trim(&c1, rp1), trim(&c2, rp2));
+    if trim1 > phi1_max || trim2 > phi2_max || trim1 >= c1.angle || trim2 >= c2.angle {
+        return None;
+    }
+    let start = add(c1.center, scale(unit(sub(center, c1.center)), c1.radius));
+    let end = add(c2.center, scale(unit(sub(center, c2.center)), c2.radius));
+    let u = unit(sub(start, center));
+    let w = unit(cross(c1.binormal, sub(start, c1.center)));
+    let sweep = dot(u, unit(sub(end, center))).clamp(-1.0, 1.0).acos();
+    let v = v_plan.min(req);
+    Some((
+        Arc3 { start, end, center, u, w, radius: big_r, sweep, v, v_plan, trim: 0.0, a_max },
+        [trim1, trim2],
+    ))
+}
+
 /// A straight move meeting a circle at a corner (nm, nm/µs), as the line-to-arc case sees it.
 #[derive(Debug, Clone, Copy)]
 pub struct LineCircle {
@@ -102,7 +240,7 @@ pub fn line_arc_blend(
     req: f64,
     feed_scale: f64,
 ) -> Option<LineArcBlend> {
-    use std::f64::consts::{FRAC_PI_2, PI};
+    use std::f64::consts::FRAC_PI_2;
     let (p, u1, c, r) = (g.corner, g.u_line, g.center, g.radius);
     if !(g.line_len > 1.0 && r > 1.0 && g.angle > 0.0) {
         return None;
@@ -122,7 +260,6 @@ pub fn line_arc_blend(
     if theta <= 0.0 {
         return None;
     }
-    let phi = PI - 2.0 * theta;
     let l1 = g.line_len.min(g.line_nominal / 2.0);
     let l2 = if convex { (phi2_max / 4.0).sin() * r } else { phi2_max * r };
     // Each move's tolerance, or a quarter of its nominal length where it has none
@@ -137,20 +274,7 @@ pub fn line_arc_blend(
     if norm(cross(bin, g.binormal)) > 1e-6 {
         return None;
     }
-    let a_max = inscribed(bin, acc);
-    let a_n = a_max * 0.75f64.sqrt();
-    let v_goal = (req * feed_scale).min(inscribed(bin, rate));
-    let d_tol = theta.cos() * tol / (1.0 - theta.sin());
-    let d_geom = l1.min(l2).min(d_tol);
-    let r_geom = theta.tan() * d_geom;
-    let v_plan = (a_n * r_geom).sqrt().min(v_goal);
-    let a_par = 0.5 * a_max;
-    let t_blend = (2.0 * a_par * d_geom).sqrt().min(v_plan) / a_par;
-    let r_blend = (t_blend * v_plan / phi).min(r_geom);
-    let big_r = (v_plan * v_plan / a_n).max(r_blend);
-    if !(big_r > 1.0 && v_plan > 0.0) {
-        return None;
-    }
+    let (big_r, v_plan, a_max) = radius_and_speed(theta, [l1, l2], tol, bin, (rate, acc), req * feed_scale)?;
     // Put the arc tangent to the line (its centre R off it, towards the turn) and to the circle.
     let d2 = if convex { r - big_r } else { r + big_r };
     let n1 = unit(cross(bin, u1));
@@ -281,6 +405,49 @@ mod tests {
         assert!(a.w[1] < -0.99 && a.w[0] > 0.0, "{:?}", a.w);
         let w_end = add(scale(a.u, -a.sweep.sin()), scale(a.w, a.sweep.cos()));
         assert!(norm(sub(w_end, [1.0, 0.0, 0.0])) < 1e-9, "{w_end:?}");
+    }
+
+    /// `G3 X30 Y0 I5 J0` (from X20, about X25) then `G2 X30 Y-10 I0 J-5` at F600: the first
+    /// circle concave at the corner, the second convex (it bends away from the turn). By hand from
+    /// blendmath.c: φ2max = min(π/3, 45°) = π/4, θ = 45° − φ2max/4 = 0.589 rad, L2 = sin(φ2max/4)·5
+    /// = 0.975 mm (the least), R_geom = tan θ · 0.975 = 0.652, v_plan 12 mm/s, the parabolic radius
+    /// 0.567/(π − 2θ) = 0.289 < 12²/440 = 0.3273 mm = R; the centre 5 + R from (25, 0) and 5 − R
+    /// from (30, −5), the one nearer the corner: (30.3166, −0.3382), the corner passed at 0.1360 mm.
+    #[test]
+    fn an_arc_to_arc_corner_is_what_blendmath_gives() {
+        use std::f64::consts::PI;
+        let first =
+            Circle { center: [25.0 * MM, 0.0, 0.0], radius: 5.0 * MM, binormal: [0.0, 0.0, 1.0], angle: PI };
+        let second = Circle {
+            center: [30.0 * MM, -5.0 * MM, 0.0],
+            radius: 5.0 * MM,
+            binormal: [0.0, 0.0, -1.0],
+            angle: PI,
+        };
+        let corner = [30.0 * MM, 0.0, 0.0];
+        let (a, [t1, t2]) =
+            arc_arc_blend(corner, [first, second], ([30.48; 3], [508e-6; 3]), [0.0; 2], 10.0, 1.2)
+                .expect("a blend");
+        assert!((a.radius / MM - 144.0 / (508.0 * 0.75f64.sqrt())).abs() < 1e-6, "R {}", a.radius / MM);
+        assert!((a.center[0] / MM - 30.3166).abs() < 2e-4 && (a.center[1] / MM + 0.3382).abs() < 2e-4);
+        assert!(((norm(sub(a.center, corner)) - a.radius) / MM - 0.1360).abs() < 2e-4);
+        // Tangent to both: outside the first (5 + R), inside the second (5 − R).
+        assert!((norm(sub(a.center, first.center)) - first.radius - a.radius).abs() < 1e-3);
+        assert!((norm(sub(a.center, second.center)) - second.radius + a.radius).abs() < 1e-3);
+        assert!(t1 > 0.0 && t1 < PI / 2.0 && t2 > 0.0 && t2 < PI / 4.0, "{t1} {t2}");
+        // It leaves the first circle going its way and joins the second going its way.
+        let t_start = unit(cross(first.binormal, sub(a.start, first.center)));
+        let t_end = unit(cross(second.binormal, sub(a.end, second.center)));
+        let w_end = add(scale(a.u, -a.sweep.sin()), scale(a.w, a.sweep.cos()));
+        assert!(norm(sub(t_start, a.w)) < 1e-9 && norm(sub(t_end, w_end)) < 1e-6, "{t_end:?} {w_end:?}");
+        assert!((a.v - 10.0).abs() < 1e-9);
+        // Two circles continuing tangentially (the same circle's two halves) have none.
+        let half =
+            Circle { center: [25.0 * MM, 0.0, 0.0], radius: 5.0 * MM, binormal: [0.0, 0.0, 1.0], angle: PI };
+        assert_eq!(
+            arc_arc_blend(corner, [first, half], ([30.48; 3], [508e-6; 3]), [0.0; 2], 10.0, 1.2),
+            None
+        );
     }
 
     #[test]

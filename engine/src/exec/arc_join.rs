@@ -2,10 +2,11 @@
 //! feed, with a blend arc (DEC-164, `arc_blend.rs` for the geometry): the feed runs to the blend's
 //! start and reaches it at the blend's speed, the blend runs (`start_blend_arc`), the circle starts
 //! where the blend touches it at that speed; leaving the circle, it ends where the next blend
-//! starts, at its speed, and the next feed starts at the blend's end. Only under
-//! `nc.trajectory_planner` 209, in G64, with neither single block nor a helix.
+//! starts, at its speed, and the next feed starts at the blend's end; from one arc into the next
+//! alike (tp.c `tpCreateArcArcBlend`). Only under `nc.trajectory_planner` 209, in G64, with
+//! neither single block nor a helix.
 
-use super::arc_blend::{self, LineCircle};
+use super::arc_blend::{self, Circle, LineCircle};
 use super::blend::Arc3;
 use super::planner::PendingBlend;
 use super::Exec;
@@ -130,8 +131,9 @@ impl Exec<'_> {
     }
 
     /// Leaving a G2/G3 arc per minute from `start` to `target` at `scale` of the acceleration:
-    /// the blend to the next move if that is a feed per minute 2.9 joins to it with one, with the
-    /// angle it takes off the circle's end and the next feed's target and length.
+    /// the blend to the next move if that is a feed per minute or another such arc 2.9 joins to it
+    /// with one, with the angle it takes off the circle's end and the next move's target and
+    /// length.
     pub(super) fn arc_to_line_blend(
         &mut self,
         start: [f64; 3],
@@ -147,6 +149,28 @@ impl Exec<'_> {
         }
         let v1 = self.acting_feed(feed)?;
         let (step, tol2, _) = self.upcoming_moves(1).pop()?;
+        if let Step::Arc { target: q, center: cq, plane: pq, clockwise: cwq, feed: f2 } = step {
+            // Into another arc of the same plane: 2.9's arc-to-arc blend.
+            if pq != plane || (3..AXES).any(|i| q[i] != target[i]) {
+                return None;
+            }
+            let v2 = self.acting_feed(f2)?;
+            let circle = |(center, radius, binormal, angle)| Circle { center, radius, binormal, angle };
+            let corner = f3(target);
+            let mut first = circle(circle_of(start, target, center, plane, cw)?);
+            first.radius = dist(corner, first.center);
+            let second = circle(circle_of(corner, q, cq, pq, cwq)?);
+            let (rate, acc) = self.axis_bounds(scale);
+            let feed_scale = self.cfg.overrides.feed_max_pct as f64 / 100.0;
+            let tols = [self.path_tolerance, tol2];
+            let (mut arc, [trim1, trim2]) =
+                arc_blend::arc_arc_blend(corner, [first, second], (rate, acc), tols, v1.min(v2), feed_scale)?;
+            // The second arc can stop after the blend.
+            let rest = second.radius * (second.angle - trim2);
+            arc.v = arc.v.min((2.0 * self.cut_accel() * rest.max(0.0)).sqrt());
+            let nominal2 = second.radius * second.angle;
+            return (arc.v >= super::planner::MIN_ARC_SPEED).then_some((arc, trim1, q, nominal2));
+        }
         let Step::Feed { target: q, feed: next_feed } = step else { return None };
         if (3..AXES).any(|i| q[i] != target[i]) {
             return None;
