@@ -6,8 +6,8 @@
 //! copied:
 //!
 //! - θ, the half angle between the line and the circle's tangent at the corner; the circle is
-//!   *convex* at the corner when the line runs on its outside (its tangent then stands for the
-//!   secant to half the circle's allowed angle, and θ is reduced by a quarter of that angle);
+//!   *convex* at the corner when its centre is not ahead of the corner along the line (it bends
+//!   away from the turn: θ is then reduced by a quarter of the angle it may give up);
 //! - the circle may give up at most a third of its angle (line to arc) or two thirds (arc to
 //!   line), and at most θ (convex) or a quarter turn; the line at most half its length;
 //! - radius and speed as between two lines (`blend.rs`: tolerance, normal acceleration √¾ of the
@@ -19,7 +19,8 @@
 //!   from the corner than the tolerance, or taking more of the circle than its share, or a line
 //!   out of the circle's plane, is no blend (the moves stop: 2.9's parabolic blend is L-124).
 //!
-//! An arc-to-line corner is the line-to-arc corner of the path run backwards.
+//! An arc-to-line corner is the line-to-arc corner of the path run backwards. Two arcs that turn
+//! (`arc_arc_blend`, tp.c `tpCreateArcArcBlend`) follow the same rules with a circle on each side.
 
 use super::blend::{along, Arc3};
 

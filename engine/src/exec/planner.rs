@@ -14,8 +14,8 @@
 //!
 //! Two G64 rapids, or two G64 feeds per minute, that turn are joined by 2.9's blend arc
 //! (`blend.rs`, DEC-164; a thread pass and its exit taper: `pass_blend.rs`; a feed and a G2/G3
-//! arc: `arc_blend.rs`, `arc_join.rs`). Not modelled (L-124): arc-to-arc blends, tangent joins and
-//! 2.9's parabolic blend (`tpDoParabolicBlending`): such a pair stops exactly here, at full
+//! arc or two arcs: `arc_blend.rs`, `arc_join.rs`). Not modelled (L-124): tangent joins and 2.9's
+//! parabolic blend (`tpDoParabolicBlending`): such a pair stops exactly here, at full
 //! acceleration.
 
 use std::collections::VecDeque;
