@@ -23,7 +23,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// A G2/G3 circle from `start` to `target` about `center` (in `plane`): its centre (X, Y, Z), its
 /// radius at `start`, the unit normal its travel turns about counterclockwise, and its angle
-/// (unsigned, rad). None for a helix (the third axis moves) or no circle.
+/// (unsigned, rad). None for a helix (the third axis moves), a spiral or no circle.
 fn circle_of(
     start: [f64; 3],
     target: Pos,
@@ -42,6 +42,10 @@ fn circle_of(
     let (sx, sy) = (start[i0] - c[i0], start[i1] - c[i1]);
     let (ex, ey) = (t[i0] - c[i0], t[i1] - c[i1]);
     let radius = sx.hypot(sy);
+    // A spiral (the end off the start's circle by more than a µm) is not blended here.
+    if (ex.hypot(ey) - radius).abs() > 1000.0 {
+        return None;
+    }
     let tau = std::f64::consts::TAU;
     let mut sweep = ey.atan2(ex) - sy.atan2(sx);
     if cw {
