@@ -46,6 +46,17 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
+/// 2.9's tangent join (tp.c `tpSetupTangent`): a kink small enough that the change of direction
+/// at the fastest speed asked, taken in one servo period (1 ms), needs under a tenth of the axes'
+/// acceleration (`arcBlendTangentKinkRatio`; with an arc, of its tangential half) gets no blend
+/// arc. True for such a kink.
+fn tangent_join(u1: [f64; 3], u2: [f64; 3], v_max: f64, acc: [f64; 3]) -> bool {
+    let a_inst = v_max / 1000.0 + along(u2, acc);
+    let d = sub(u2, u1);
+    let worst = (0..3).map(|i| (a_inst * d[i]).abs() / acc[i].max(1e-30)).fold(0.0, f64::max);
+    worst / 0.5 < 0.1
+}
+
 /// The diameter of the largest circle of the plane with unit normal `n` in the box `±bound`
 /// (blendmath.c `calculateInscribedDiameter`).
 fn inscribed(n: [f64; 3], bound: [f64; 3]) -> f64 {
@@ -127,6 +138,9 @@ pub fn arc_arc_blend(
     let u_tan2 = unit(cross(c2.binormal, rp2));
     let theta_tan = 0.5 * (-dot(u_tan1, u_tan2)).clamp(-1.0, 1.0).acos();
     if FRAC_PI_2 - theta_tan < 1e-6 || theta_tan < 1e-6 {
+        return None;
+    }
+    if tangent_join(u_tan1, u_tan2, (req * feed_scale).min(along(u_tan1, rate)), acc) {
         return None;
     }
     let bin = unit(cross(u_tan1, u_tan2));
@@ -269,6 +283,9 @@ pub fn line_arc_blend(
     let t1 = if tolerance[0] > 0.0 { tolerance[0] } else { q1 };
     let t2 = if tolerance[1] > 0.0 { tolerance[1] } else { 0.25 * arc_len };
     let tol = t1.min(t2).min(q1).min(0.25 * arc_len);
+    if tangent_join(u1, u_tan2, (req * feed_scale).min(along(u1, rate)), acc) {
+        return None;
+    }
     let bin = unit(cross(u1, u_tan2));
     // Only a line in the circle's plane (tp.c: the blend's binormal colinear with the circle's
     // normal); a line out of it (a helix-like entry, a Z move into an XY arc) stops.
@@ -449,6 +466,30 @@ mod tests {
             arc_arc_blend(corner, [first, half], ([30.48; 3], [508e-6; 3]), [0.0; 2], 10.0, 1.2),
             None
         );
+    }
+
+    /// A line meeting the circle 0.05° off its tangent: 2.9 joins them tangentially (the kink at
+    /// 12 mm/s in 1 ms needs 12.5 m/s² × 0.00087 = 11 mm/s², over half of 508 under a tenth),
+    /// no arc; 1° off, an arc.
+    #[test]
+    fn a_small_kink_is_a_tangent_join_not_an_arc() {
+        let g = |deg: f64| {
+            let a = deg.to_radians();
+            LineCircle {
+                corner: [10.0 * MM, 0.0, 0.0],
+                u_line: [-a.sin(), a.cos(), 0.0],
+                line_len: 10.0 * MM,
+                line_nominal: 10.0 * MM,
+                center: [15.0 * MM, 0.0, 0.0],
+                radius: 5.0 * MM,
+                binormal: [0.0, 0.0, -1.0],
+                angle: std::f64::consts::PI,
+                angle_share: 1.0 / 3.0,
+            }
+        };
+        let blend = |deg| line_arc_blend(&g(deg), [30.48; 3], [508e-6; 3], [0.0; 2], 10.0, 1.2);
+        assert_eq!(blend(0.05), None);
+        assert!(blend(1.0).is_some());
     }
 
     #[test]
