@@ -51,10 +51,35 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// acceleration (`arcBlendTangentKinkRatio`; with an arc, of its tangential half) gets no blend
 /// arc. True for such a kink.
 fn tangent_join(u1: [f64; 3], u2: [f64; 3], v_max: f64, acc: [f64; 3]) -> bool {
+    tangent_join_of(u1, u2, v_max, acc, true)
+}
+
+/// [`tangent_join`] for two moves along `u1` then `u2` at the corner, `circular` when either is
+/// an arc (the ratio then against the tangential half of the acceleration).
+pub fn tangent_join_of(u1: [f64; 3], u2: [f64; 3], v_max: f64, acc: [f64; 3], circular: bool) -> bool {
     let a_inst = v_max / 1000.0 + along(u2, acc);
     let d = sub(u2, u1);
     let worst = (0..3).map(|i| (a_inst * d[i]).abs() / acc[i].max(1e-30)).fold(0.0, f64::max);
-    worst / 0.5 < 0.1
+    let worst = if circular { worst / 0.5 } else { worst };
+    dot(u1, u2) > 0.0 && worst < 0.1
+}
+
+/// A tangent join at `corner` run at `v` (nm/µs): no arc (no sweep), the first move ending at the
+/// corner at `v`, the next starting there at `v` (tp.c `TC_TERM_COND_TANGENT`).
+pub fn tangent_arc(corner: [f64; 3], dir: [f64; 3], v: f64) -> Arc3 {
+    Arc3 {
+        start: corner,
+        end: corner,
+        center: corner,
+        u: [0.0; 3],
+        w: dir,
+        radius: 0.0,
+        sweep: 0.0,
+        v,
+        v_plan: v,
+        trim: 0.0,
+        a_max: 0.0,
+    }
 }
 
 /// The diameter of the largest circle of the plane with unit normal `n` in the box `±bound`

@@ -65,6 +65,28 @@ fn circle_of(
     (radius > 1.0).then_some((c, radius, bin, sweep.abs()))
 }
 
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn scale(a: [f64; 3], k: f64) -> [f64; 3] {
+    a.map(|x| x * k)
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt().max(1e-30);
+    scale(a, 1.0 / n)
+}
+
+/// The travel direction of a circle at `p`.
+fn tangent_at(c: &Circle, p: [f64; 3]) -> [f64; 3] {
+    unit(cross(c.binormal, sub(p, c.center)))
+}
+
 impl Exec<'_> {
     /// The rapid rates (nm/µs) and accelerations (nm/µs², × `scale`) of X, Y and Z.
     fn axis_bounds(&self, scale: f64) -> ([f64; 3], [f64; 3]) {
@@ -125,7 +147,17 @@ impl Exec<'_> {
             angle_share: 1.0 / 3.0,
         };
         let (rate, acc) = ([rate[0], rate[1], rate[2]], [acc[0], acc[1], acc[2]]);
-        let mut b = arc_blend::line_arc_blend(&g, rate, acc, tols, v_feed.min(v2), feed_scale)?;
+        let v_max = (v_feed.min(v2) * feed_scale).min(super::blend::along(u_line, rate));
+        let u_tan2 = unit(cross(binormal, sub(p1, c)));
+        let mut b = match arc_blend::line_arc_blend(&g, rate, acc, tols, v_feed.min(v2), feed_scale) {
+            Some(b) => b,
+            // 2.9's tangent join: on at the lower speed asked, no arc.
+            None if arc_blend::tangent_join_of(u_line, u_tan2, v_max, acc, true) => arc_blend::LineArcBlend {
+                arc: arc_blend::tangent_arc(p1, u_line, v_feed.min(v2)),
+                circle_trim: 0.0,
+            },
+            None => return None,
+        };
         // The line reaches the blend's speed by its start; the circle can stop after it.
         let a = self.cut_accel();
         let reach = (v0 * v0 + 2.0 * a * (len - b.arc.trim).max(0.0)).sqrt();
@@ -134,7 +166,8 @@ impl Exec<'_> {
         Some((b.arc, *target))
     }
 
-    /// Leaving a G2/G3 arc per minute from `start` to `target` at `scale` of the acceleration:
+    /// Leaving a G2/G3 arc per minute from `start` to `target`, entered at `v0`, at `acc_scale` of
+    /// the acceleration:
     /// the blend to the next move if that is a feed per minute or another such arc 2.9 joins to it
     /// with one, with the angle it takes off the circle's end and the next move's target and
     /// length.
@@ -142,7 +175,7 @@ impl Exec<'_> {
         &mut self,
         start: [f64; 3],
         (target, center, plane, cw, feed): (Pos, [i64; 2], Plane, bool, Feed),
-        scale: f64,
+        (acc_scale, v0): (f64, f64),
     ) -> Option<(Arc3, f64, Pos, f64)> {
         if !self.cfg.parabolic_half_accel
             || !self.cfg.coordinated_rapid
@@ -164,11 +197,28 @@ impl Exec<'_> {
             let mut first = circle(circle_of(start, target, center, plane, cw)?);
             first.radius = dist(corner, first.center);
             let second = circle(circle_of(corner, q, cq, pq, cwq)?);
-            let (rate, acc) = self.axis_bounds(scale);
+            let (rate, acc) = self.axis_bounds(acc_scale);
             let feed_scale = self.cfg.overrides.feed_max_pct as f64 / 100.0;
             let tols = [self.path_tolerance, tol2];
-            let (mut arc, [trim1, trim2]) =
-                arc_blend::arc_arc_blend(corner, [first, second], (rate, acc), tols, v1.min(v2), feed_scale)?;
+            let (t1, t2) = (tangent_at(&first, corner), tangent_at(&second, corner));
+            let v_max = (v1.min(v2) * feed_scale).min(super::blend::along(t1, rate));
+            let (mut arc, [trim1, trim2]) = match arc_blend::arc_arc_blend(
+                corner,
+                [first, second],
+                (rate, acc),
+                tols,
+                v1.min(v2),
+                feed_scale,
+            ) {
+                Some(b) => b,
+                None if arc_blend::tangent_join_of(t1, t2, v_max, acc, true) => {
+                    (arc_blend::tangent_arc(corner, t1, v1.min(v2)), [0.0, 0.0])
+                }
+                None => return None,
+            };
+            // The arc reaches the speed by its end.
+            let own = first.radius * (first.angle - trim1);
+            arc.v = arc.v.min((v0 * v0 + 2.0 * self.cut_accel() * own.max(0.0)).sqrt());
             // The second arc can stop after the blend.
             let rest = second.radius * (second.angle - trim2);
             arc.v = arc.v.min((2.0 * self.cut_accel() * rest.max(0.0)).sqrt());
@@ -203,10 +253,22 @@ impl Exec<'_> {
             angle,
             angle_share: 2.0 / 3.0,
         };
-        let (rate, acc) = self.axis_bounds(scale);
+        let (rate, acc) = self.axis_bounds(acc_scale);
         let feed_scale = self.cfg.overrides.feed_max_pct as f64 / 100.0;
         let tols = [self.path_tolerance, tol2];
-        let mut b = arc_blend::arc_line_blend(&g, rate, acc, tols, v1.min(v2), feed_scale)?;
+        let t1 = tangent_at(&Circle { center: c, radius: g.radius, binormal, angle }, corner);
+        let u2 = scale(u_line, -1.0);
+        let v_max = (v1.min(v2) * feed_scale).min(super::blend::along(t1, rate));
+        let mut b = match arc_blend::arc_line_blend(&g, rate, acc, tols, v1.min(v2), feed_scale) {
+            Some(b) => b,
+            None if arc_blend::tangent_join_of(t1, u2, v_max, acc, true) => arc_blend::LineArcBlend {
+                arc: arc_blend::tangent_arc(corner, t1, v1.min(v2)),
+                circle_trim: 0.0,
+            },
+            None => return None,
+        };
+        let own = g.radius * (angle - b.circle_trim);
+        b.arc.v = b.arc.v.min((v0 * v0 + 2.0 * self.cut_accel() * own.max(0.0)).sqrt());
         // The next feed can stop after the blend.
         let stop = (2.0 * self.cut_accel() * (line_len - b.arc.trim).max(0.0)).sqrt();
         b.arc.v = b.arc.v.min(stop);

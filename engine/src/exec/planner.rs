@@ -14,9 +14,9 @@
 //!
 //! Two G64 rapids, or two G64 feeds per minute, that turn are joined by 2.9's blend arc
 //! (`blend.rs`, DEC-164; a thread pass and its exit taper: `pass_blend.rs`; a feed and a G2/G3
-//! arc or two arcs: `arc_blend.rs`, `arc_join.rs`). Not modelled (L-124): tangent joins and 2.9's
-//! parabolic blend (`tpDoParabolicBlending`): such a pair stops exactly here, at full
-//! acceleration.
+//! arc or two arcs: `arc_blend.rs`, `arc_join.rs`); two that continue tangentially run on through
+//! the join (2.9's tangent join, a blend of no sweep). Not modelled (L-124): 2.9's parabolic
+//! blend (`tpDoParabolicBlending`): such a pair stops exactly here, at full acceleration.
 
 use std::collections::VecDeque;
 
@@ -190,6 +190,26 @@ impl Exec<'_> {
             blend::blend_arc([p0, p1, f(p2)], nominal, v0, rate, acc, [tol1, tol2], ([req1, r2], feed_scale))
                 .map(|a| (a, p2))
         });
+        // Straight on, or a kink too small for an arc: 2.9's tangent join (tp.c `tpSetupTangent`),
+        // on at the lower speed asked, the next move able to stop by its end.
+        if let (None, Some((p2, r2, _))) = (&arc, next) {
+            let q2 = f(p2);
+            let len2 = ((q2[0] - p1[0]).powi(2) + (q2[1] - p1[1]).powi(2) + (q2[2] - p1[2]).powi(2)).sqrt();
+            if len2 > 1.0 {
+                let u1 = [(p1[0] - p0[0]) / len, (p1[1] - p0[1]) / len, (p1[2] - p0[2]) / len];
+                let u2 = [(q2[0] - p1[0]) / len2, (q2[1] - p1[1]) / len2, (q2[2] - p1[2]) / len2];
+                let (r3, a3) = ([rate[0], rate[1], rate[2]], [acc[0], acc[1], acc[2]]);
+                let (v1max, v2max) = (blend::along(u1, r3), blend::along(u2, r3));
+                let v_max = (req1.min(r2) * feed_scale).min(v1max).min(v2max);
+                if super::arc_blend::tangent_join_of(u1, u2, v_max, a3, false) {
+                    let a1 = self.line_accel(u1, &acc, v_feed.is_some(), scale);
+                    let a2 = self.line_accel(u2, &acc, v_feed.is_some(), 1.0);
+                    let reach = (v0 * v0 + 2.0 * a1 * len).sqrt();
+                    let v = req1.min(r2).min(v1max).min(v2max).min(reach).min((2.0 * a2 * len2).sqrt());
+                    arc = Some((super::arc_blend::tangent_arc(p1, u1, v), p2));
+                }
+            }
+        }
         // A feed into a G2/G3 arc: 2.9's line-to-arc blend (`arc_blend.rs`).
         if let (None, Some(v), Some((step, tol2, _))) = (&arc, v_feed, ahead.first()) {
             let line = (p0, p1, len, nominal, v0);
@@ -279,6 +299,11 @@ impl Exec<'_> {
             return false;
         }
         let a = &b.arc;
+        // A tangent join (`arc_blend::tangent_arc`): no arc, the move starts at the speed.
+        if a.sweep == 0.0 {
+            self.entry = Some((a.v, b.nominal2));
+            return false;
+        }
         let len = a.radius * a.sweep;
         let profile = Profile::between(len, a.v, a.v, a.v, 1.0, self.cfg.period_us);
         let mut end = self.cmd;

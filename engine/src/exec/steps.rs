@@ -441,7 +441,8 @@ impl Exec<'_> {
         // next feed, the circle runs from the blend's end to the next blend's start.
         let entry = if self.cfg.parabolic_half_accel { self.entry.take().map(|e| e.0) } else { None };
         let sf = [s[0] as f64, s[1] as f64, s[2] as f64];
-        let exit = self.arc_to_line_blend(sf, (target, center, plane, cw, feed), scale);
+        let exit =
+            self.arc_to_line_blend(sf, (target, center, plane, cw, feed), (scale, entry.unwrap_or(0.0)));
         if entry.is_some() || exit.is_some() {
             let mut end = target;
             let (mut sweep, mut v1) = (sweep, 0.0);
