@@ -256,8 +256,8 @@ fn every_recorded_program_keeps_the_physics_under_2_9_s_planner() {
     }
 }
 
-/// Random G64 programs (rapids and feeds through a box, mode changes, G64 P, canned cycles, G33.1,
-/// dwells and spindle commands), some with a feed hold and a cycle start or single block, run
+/// Random G64 programs (rapids, feeds and G2/G3 arcs through a box, mode changes, G64 P, canned
+/// cycles, G33.1, dwells and spindle commands), some with a feed hold and a cycle start or single block, run
 /// under 2.9's planner to their end without a panic and within the machine's limits.
 #[test]
 fn random_g64_programs_keep_the_physics_under_2_9_s_planner() {
@@ -272,8 +272,40 @@ fn random_g64_programs_keep_the_physics_under_2_9_s_planner() {
         let mut text = String::from("G21 G90 G17\nM3 S800\n");
         for _ in 0..10 {
             let (x, y, z) = (next(40) as f64 - 20.0, next(40) as f64 - 20.0, next(20) as f64);
-            text.push_str(&match next(14) {
+            text.push_str(&match next(16) {
                 0 | 12 | 13 => format!("G1 X{x} Y{y} Z{z} F{}\n", 100 + next(2900)),
+                // A feed to (x, y) in the plane, a G2/G3 about a centre 0.5..8 mm off through
+                // 10°..350°, a feed on in the plane (lines meet the circle at any angle, convex
+                // or concave), at a feed whose centripetal acceleration the circle allows (the
+                // engine does not slow an arc for it).
+                14 | 15 => {
+                    let (r, a0) = (0.5 + next(75) as f64 / 10.0, next(360) as f64);
+                    let a1 = a0 + if next(2) == 0 { -1.0 } else { 1.0 } * (10.0 + next(340) as f64);
+                    let (cx, cy) = (x - r * a0.to_radians().cos(), y - r * a0.to_radians().sin());
+                    let (ex, ey) = (cx + r * a1.to_radians().cos(), cy + r * a1.to_radians().sin());
+                    let g = if a1 < a0 { 2 } else { 3 };
+                    let f = 60.0 * (300.0 * r).sqrt() * (1 + next(9)) as f64 / 10.0;
+                    let (x2, y2) = (next(40) as f64 - 20.0, next(40) as f64 - 20.0);
+                    // Then a feed on, or a second circle of the same size about a centre at a
+                    // random angle from the first one's end (G2 or G3: the corner any angle).
+                    let on = if next(2) == 0 {
+                        format!("G1 X{x2} Y{y2}\n")
+                    } else {
+                        let b = (next(360) as f64).to_radians();
+                        let (dx, dy) = (r * b.cos(), r * b.sin());
+                        format!(
+                            "G{} X{:.4} Y{:.4} I{dx:.4} J{dy:.4}\n",
+                            2 + next(2),
+                            ex + 2.0 * dx,
+                            ey + 2.0 * dy
+                        )
+                    };
+                    format!(
+                        "G1 X{x} Y{y} F{f:.0}\nG{g} X{ex:.4} Y{ey:.4} I{:.4} J{:.4}\n{on}",
+                        cx - x,
+                        cy - y
+                    )
+                }
                 1 => "G61.1\n".into(),
                 2 => format!("G64 P{}\n", next(5) as f64 * 0.05),
                 3 => "G64\n".into(),
@@ -305,5 +337,124 @@ fn random_g64_programs_keep_the_physics_under_2_9_s_planner() {
         let opts = RunOptions { inputs, time_limit_us: 120_000_000, ..RunOptions::default() };
         let trace = m.run_to_trace(&prog, &opts);
         assert_eq!(check(&trace, &Limits::of(&m), None), vec![], "case {case}:\n{text}");
+    }
+}
+
+/// The closest the path comes to the point (`x`, `y`) (mm) and the slowest path speed (mm/s) while
+/// within 1 mm of it.
+fn pass_by(t: &Trace, (px, py): (f64, f64)) -> (f64, f64) {
+    let (x, y) = (axis(t, 0), axis(t, 1));
+    let near = |k: usize| (x[k] - px).hypot(y[k] - py);
+    let closest = (0..x.len()).map(near).fold(f64::INFINITY, f64::min);
+    let slowest = (1..x.len())
+        .filter(|&k| near(k) < 1.0)
+        .map(|k| (x[k] - x[k - 1]).hypot(y[k] - y[k - 1]) * 1e3)
+        .fold(f64::INFINITY, f64::min);
+    (closest, slowest)
+}
+
+/// `recordings/debian-2.9-g64/g64_arcs`: a G1 into a G2 half circle (R5 about X15) and out into a
+/// G1, at F600, 90° corners both. 2.9 joins each with a blend arc tangent to the line and to the
+/// circle (blendmath.c `blendInit3FromLineArc` / `blendLineArcPostProcess`, and the arc-to-line
+/// pair), by hand: θ = 45°, v_plan = 10 · 1.2 = 12 mm/s (the feed override's top), the
+/// parabolic-blend radius R = (12/254 · 12)/(π/2) = 0.3609 mm (≥ 12²/440), its centre R off the
+/// line and 5 + R from the circle's: d_L = √(25 + 10R) − 5 = 0.3488 mm, the corner passed at
+/// √(d_L² + R²) − R = 0.1410 mm, at the feed (10 mm/s: 277 mm/s² across). Under G64 P0.05 the
+/// tolerance bounds it: d = 0.05 · cos 45°/(1 − sin 45°) = 0.1207 mm = R, √(440 · R) = 7.29 mm/s,
+/// the corner passed at 0.049 mm. The planner after 2.9 stops at both corners.
+#[test]
+fn a_g64_line_and_a_g2_arc_are_joined_by_2_9_s_blend_arcs() {
+    use nc_engine::invariants::physics::{check, Limits};
+    let program = |g64: &str| {
+        format!("G21 G90 G17 {g64}\nG0 X0 Y0 Z1\nG1 Z0 F600\nG1 X10\nG2 X20 Y0 I5 J0\nG1 X30\nG0 Z5\nM2\n")
+    };
+    let t = run(209.0, &program("G64"));
+    for corner in [(10.0, 0.0), (20.0, 0.0)] {
+        let (closest, slowest) = pass_by(&t, corner);
+        assert!((closest - 0.1410).abs() < 0.003, "{corner:?}: {closest} mm");
+        assert!(slowest > 9.9, "{corner:?}: {slowest} mm/s");
+    }
+    // Y leaves the line at X 10 − d_L = 9.651.
+    let (x, y) = (axis(&t, 0), axis(&t, 1));
+    let k = y.iter().position(|v| *v > 0.0).unwrap();
+    assert!((x[k - 1] - 9.651).abs() < 0.011, "Y leaves at X {}", x[k - 1]);
+    // The centripetal 10²/0.3609 = 277 mm/s² on Y, within √¾ of 508 and the axes' limits.
+    let peak_y = peak_accel_and_time(&y).0;
+    assert!((peak_y - 277.0).abs() < 12.0 && peak_y < 440.0, "{peak_y} mm/s²");
+    let mut m = nc_engine::Machine::new("linuxcnc").unwrap();
+    for (id, ax, v) in [("nc.period_us", None, 1000.0), ("nc.trajectory_planner", None, 209.0)] {
+        m.params.set(id, ax, v).unwrap();
+    }
+    for ax in ['X', 'Y', 'Z'] {
+        m.params.set("nc.rapid_mm_min", Some(ax), 1828.8).unwrap();
+        m.params.set("nc.rapid_ramp_ms", Some(ax), 60.0).unwrap();
+    }
+    assert_eq!(check(&t, &Limits::of(&m), None), vec![]);
+    // G64 P0.05: within the tolerance, slower.
+    let p = run(209.0, &program("G64 P0.05"));
+    for corner in [(10.0, 0.0), (20.0, 0.0)] {
+        let (closest, slowest) = pass_by(&p, corner);
+        assert!(closest <= 0.05 && closest > 0.045, "{corner:?}: {closest} mm");
+        assert!((slowest - 7.29).abs() < 0.1, "{corner:?}: {slowest} mm/s");
+    }
+    // After 2.9 (and under G61.1): exact stops on the corners.
+    for t in [run(210.0, &program("G64")), run(209.0, &program("G61.1"))] {
+        for corner in [(10.0, 0.0), (20.0, 0.0)] {
+            let (closest, slowest) = pass_by(&t, corner);
+            assert!(closest < 1e-6 && slowest < 1.0, "{corner:?}: {closest} mm, {slowest} mm/s");
+        }
+    }
+}
+
+/// Two G2/G3 arcs meeting at 90°: `G3 X30 Y0 I5 J0` (from X20) into `G2 X30 Y-10 I0 J-5` at
+/// F600, joined by 2.9's arc-to-arc blend (tp.c `tpCreateArcArcBlend`): the second circle is
+/// convex at the corner (it bends away from the turn), so θ = 45° − (π/4)/4 and the arc is the
+/// speed's: R = 12²/440 = 0.3273 mm, tangent to both circles, the corner passed at 0.1360 mm
+/// (by hand: `exec/arc_blend.rs`), at the feed. Where two arcs continue tangentially (the G2's
+/// end into the G3) there is none: 2.9's tangent join runs on at the feed.
+#[test]
+fn two_g64_arcs_that_turn_are_joined_by_2_9_s_blend_arc() {
+    let program = "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X10 F600\nG2 X20 Y0 I5 J0\nG3 X30 Y0 I5 J0\n\
+                   G2 X30 Y-10 I0 J-5\nG1 X0 Y-10\nM2\n";
+    let t = run(209.0, program);
+    let (closest, slowest) = pass_by(&t, (30.0, 0.0));
+    assert!((closest - 0.1360).abs() < 0.003, "{closest} mm");
+    assert!(slowest > 9.9, "{slowest} mm/s");
+    let (closest, slowest) = pass_by(&t, (20.0, 0.0));
+    assert!(closest < 0.011 && slowest > 9.9, "{closest} mm, {slowest} mm/s");
+    // Through the corner the centripetal 10²/0.3273 = 306 mm/s², within √¾ of 508.
+    let (x, y) = (axis(&t, 0), axis(&t, 1));
+    let acc = accel_magnitudes(&t);
+    let peak =
+        (1..x.len() - 1).filter(|&k| (x[k] - 30.0).hypot(y[k]) < 1.0).map(|k| acc[k - 1]).fold(0.0, f64::max);
+    assert!((peak - 305.5).abs() < 10.0 && peak < 440.0, "{peak} mm/s²");
+    let after = run(210.0, program);
+    assert!(pass_by(&after, (30.0, 0.0)).0 < 0.001);
+}
+
+/// 2.9's tangent join (tp.c `tpSetupTangent`: `TC_TERM_COND_TANGENT` where the kink needs under a
+/// tenth of the acceleration): two G1 in line, a G1 into a G3 that starts along it and the G3 into
+/// a G1 that leaves along its end run on at the feed (10 mm/s), without an arc (the path through
+/// the joins exact); the planner after 2.9, and G61.1, stop at each.
+#[test]
+fn g64_moves_that_continue_tangentially_run_on_at_the_feed_in_2_9() {
+    let program = |mode: &str| {
+        format!("G21 G90 G17 {mode}\nG0 X0 Y0 Z0\nG1 X10 F600\nG1 X20\nG3 X30 Y10 I0 J10\nG1 Y20\nM2\n")
+    };
+    let joins = [(10.0, 0.0), (20.0, 0.0), (30.0, 10.0)];
+    let t = run(209.0, &program("G64"));
+    for j in joins {
+        let (closest, slowest) = pass_by(&t, j);
+        assert!(closest < 0.011 && slowest > 9.9, "{j:?}: {closest} mm, {slowest} mm/s");
+    }
+    // On the path: Y stays 0 up to X20, X stays 30 from Y10.
+    let (x, y) = (axis(&t, 0), axis(&t, 1));
+    assert!(x.iter().zip(&y).all(|(x, y)| *x > 20.0 || *y == 0.0));
+    assert!(x.iter().zip(&y).all(|(x, y)| *y < 10.0 || (*x - 30.0).abs() < 1e-6));
+    for t in [run(210.0, &program("G64")), run(209.0, &program("G61.1"))] {
+        for j in joins {
+            let (closest, slowest) = pass_by(&t, j);
+            assert!(closest < 0.001 && slowest < 1.0, "{j:?}: {closest} mm, {slowest} mm/s");
+        }
     }
 }

@@ -6,6 +6,8 @@
 //! of a step). The CNC acts on interpolation-period ticks; the PLC and drive ([`plc`]) answer
 //! after their own delays.
 
+mod arc_blend;
+mod arc_join;
 mod blend;
 pub mod config;
 mod css;

@@ -13,9 +13,10 @@
 //! (#4220: half acceleration only during an actual blend), which the default follows.
 //!
 //! Two G64 rapids, or two G64 feeds per minute, that turn are joined by 2.9's blend arc
-//! (`blend.rs`, DEC-164; a thread pass and its exit taper: `pass_blend.rs`). Not modelled (L-124):
-//! arcs to or from G2/G3 and 2.9's parabolic blend (`tpDoParabolicBlending`): such a pair stops
-//! exactly here, at full acceleration.
+//! (`blend.rs`, DEC-164; a thread pass and its exit taper: `pass_blend.rs`; a feed and a G2/G3
+//! arc or two arcs: `arc_blend.rs`, `arc_join.rs`); two that continue tangentially run on through
+//! the join (2.9's tangent join, a blend of no sweep). Not modelled (L-124): 2.9's parabolic
+//! blend (`tpDoParabolicBlending`): such a pair stops exactly here, at full acceleration.
 
 use std::collections::VecDeque;
 
@@ -31,7 +32,7 @@ use crate::trace::AXES;
 const LOOK_AHEAD_BLOCKS: usize = 16;
 
 /// The slowest blend arc run, nm/µs (1 mm/s): below it the moves stop at the corner instead.
-const MIN_ARC_SPEED: f64 = 1.0;
+pub(super) const MIN_ARC_SPEED: f64 = 1.0;
 
 /// What a step is to LinuxCNC's planner queue.
 enum Queue {
@@ -89,7 +90,7 @@ impl Exec<'_> {
     /// Up to `n` moves that follow the present one in the planner's queue before any queue
     /// buster, each with the blend tolerance and the path mode (G64) it is queued with: looks
     /// through the steps queued, then reads blocks ahead (kept in `ahead` until their turn).
-    fn upcoming_moves(&mut self, n: usize) -> Vec<(Step, f64, bool)> {
+    pub(super) fn upcoming_moves(&mut self, n: usize) -> Vec<(Step, f64, bool)> {
         let mut out = Vec::new();
         let (mut tol, mut cont) = (self.path_tolerance, self.path_continuous);
         // Each step in order: Some(true) to stop looking.
@@ -189,6 +190,31 @@ impl Exec<'_> {
             blend::blend_arc([p0, p1, f(p2)], nominal, v0, rate, acc, [tol1, tol2], ([req1, r2], feed_scale))
                 .map(|a| (a, p2))
         });
+        // Straight on, or a kink too small for an arc: 2.9's tangent join (tp.c `tpSetupTangent`),
+        // on at the lower speed asked, the next move able to stop by its end.
+        if let (None, Some((p2, r2, _))) = (&arc, next) {
+            let q2 = f(p2);
+            let len2 = ((q2[0] - p1[0]).powi(2) + (q2[1] - p1[1]).powi(2) + (q2[2] - p1[2]).powi(2)).sqrt();
+            if len2 > 1.0 {
+                let u1 = [(p1[0] - p0[0]) / len, (p1[1] - p0[1]) / len, (p1[2] - p0[2]) / len];
+                let u2 = [(q2[0] - p1[0]) / len2, (q2[1] - p1[1]) / len2, (q2[2] - p1[2]) / len2];
+                let (r3, a3) = ([rate[0], rate[1], rate[2]], [acc[0], acc[1], acc[2]]);
+                let (v1max, v2max) = (blend::along(u1, r3), blend::along(u2, r3));
+                let v_max = (req1.min(r2) * feed_scale).min(v1max).min(v2max);
+                if super::arc_blend::tangent_join_of(u1, u2, v_max, a3, false) {
+                    let a1 = self.line_accel(u1, &acc, v_feed.is_some(), scale);
+                    let a2 = self.line_accel(u2, &acc, v_feed.is_some(), 1.0);
+                    let reach = (v0 * v0 + 2.0 * a1 * len).sqrt();
+                    let v = req1.min(r2).min(v1max).min(v2max).min(reach).min((2.0 * a2 * len2).sqrt());
+                    arc = Some((super::arc_blend::tangent_arc(p1, u1, v), p2));
+                }
+            }
+        }
+        // A feed into a G2/G3 arc: 2.9's line-to-arc blend (`arc_blend.rs`).
+        if let (None, Some(v), Some((step, tol2, _))) = (&arc, v_feed, ahead.first()) {
+            let line = (p0, p1, len, nominal, v0);
+            arc = self.line_to_arc_blend(line, step, [tol1, *tol2], v, (rate, acc), feed_scale);
+        }
         // The arc's speed lets the next move slow down to the arc after it, if one follows (the
         // planner's backward pass over its queue, tp.c `tpRunOptimization`), when the next move
         // is queued under G64.
@@ -273,6 +299,11 @@ impl Exec<'_> {
             return false;
         }
         let a = &b.arc;
+        // A tangent join (`arc_blend::tangent_arc`): no arc, the move starts at the speed.
+        if a.sweep == 0.0 {
+            self.entry = Some((a.v, b.nominal2));
+            return false;
+        }
         let len = a.radius * a.sweep;
         let profile = Profile::between(len, a.v, a.v, a.v, 1.0, self.cfg.period_us);
         let mut end = self.cmd;
@@ -298,9 +329,9 @@ impl Exec<'_> {
 /// A blend arc planned at the start of a rapid, to run before the next rapid.
 #[derive(Debug, Clone)]
 pub(super) struct PendingBlend {
-    arc: blend::Arc3,
+    pub(super) arc: blend::Arc3,
     /// Where the next rapid ends.
-    next_target: Pos,
+    pub(super) next_target: Pos,
     /// The next rapid's nominal length (corner to end), nm.
-    nominal2: f64,
+    pub(super) nominal2: f64,
 }

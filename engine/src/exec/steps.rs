@@ -177,6 +177,10 @@ impl Exec<'_> {
                 }
             }
             Step::Arc { target, center, plane, clockwise, feed } => {
+                // LinuxCNC 2.9's blend from a G64 feed into the arc (DEC-164).
+                if self.start_blend_arc(&step, target) {
+                    return;
+                }
                 self.start_arc(target, center, plane, clockwise, feed)
             }
             Step::Dwell { us } => self.active = Active::Until(ceil_to(now + us, self.cfg.period_us)),
@@ -433,6 +437,34 @@ impl Exec<'_> {
         let h = (target[i2] - s[i2]) as f64;
         let len = libm::hypot(0.5 * (radius + radius_end) * sweep.abs(), h);
         let scale = self.planner_accel_scale();
+        // LinuxCNC 2.9 (DEC-164): entered from a blend at its speed, or left through one into the
+        // next feed, the circle runs from the blend's end to the next blend's start.
+        let entry = if self.cfg.parabolic_half_accel { self.entry.take().map(|e| e.0) } else { None };
+        let sf = [s[0] as f64, s[1] as f64, s[2] as f64];
+        let exit =
+            self.arc_to_line_blend(sf, (target, center, plane, cw, feed), (scale, entry.unwrap_or(0.0)));
+        if entry.is_some() || exit.is_some() {
+            let mut end = target;
+            let (mut sweep, mut v1) = (sweep, 0.0);
+            if let Some((arc, trim, next_target, nominal2)) = exit {
+                sweep -= sweep.signum() * trim;
+                for i in 0..3 {
+                    end[i] = crate::units::round_i64(arc.start[i]);
+                }
+                v1 = arc.v;
+                self.pend_blend(arc, next_target, nominal2);
+            }
+            let len = radius * sweep.abs();
+            if let Some(v) = self.acting_feed(feed) {
+                let a = self.cfg.feed_max_nm_min / 60e6 / self.cfg.feed_ramp_us.max(1) as f64 * scale;
+                let vmax = v.min(self.cfg.feed_max_nm_min / 60e6);
+                let profile = Profile::between(len, entry.unwrap_or(0.0), vmax, v1, a, self.cfg.period_us);
+                let path =
+                    Path::Arc { profile, len, center: c, radius, radius_end: radius, a0, sweep, plane };
+                self.start_motion(end, path);
+                return;
+            }
+        }
         if let Some(profile) = self.feed_profile(len, feed, scale) {
             self.start_motion(
                 target,
