@@ -110,9 +110,9 @@ fn radius_and_speed(
     let a_max = inscribed(bin, acc);
     let a_n = a_max * 0.75f64.sqrt();
     let v_goal = v_goal.min(inscribed(bin, rate));
-    let d_tol = theta.cos() * tol / (1.0 - theta.sin());
+    let d_tol = libm::cos(theta) * tol / (1.0 - libm::sin(theta));
     let d_geom = l1.min(l2).min(d_tol);
-    let r_geom = theta.tan() * d_geom;
+    let r_geom = libm::tan(theta) * d_geom;
     let v_plan = (a_n * r_geom).sqrt().min(v_goal);
     let a_par = 0.5 * a_max;
     let t_blend = (2.0 * a_par * d_geom).sqrt().min(v_plan) / a_par;
@@ -161,7 +161,7 @@ pub fn arc_arc_blend(
     let (rp1, rp2) = (sub(p, c1.center), sub(p, c2.center));
     let u_tan1 = unit(cross(c1.binormal, rp1));
     let u_tan2 = unit(cross(c2.binormal, rp2));
-    let theta_tan = 0.5 * (-dot(u_tan1, u_tan2)).clamp(-1.0, 1.0).acos();
+    let theta_tan = 0.5 * libm::acos((-dot(u_tan1, u_tan2)).clamp(-1.0, 1.0));
     if FRAC_PI_2 - theta_tan < 1e-6 || theta_tan < 1e-6 {
         return None;
     }
@@ -187,8 +187,8 @@ pub fn arc_arc_blend(
     if theta < PI / 12.0 {
         return None;
     }
-    let l1 = if convex1 { (phi1_max / 4.0).sin() * c1.radius } else { phi1_max * c1.radius };
-    let l2 = if convex2 { (phi2_max / 4.0).sin() * c2.radius } else { phi2_max * c2.radius };
+    let l1 = if convex1 { libm::sin(phi1_max / 4.0) * c1.radius } else { phi1_max * c1.radius };
+    let l2 = if convex2 { libm::sin(phi2_max / 4.0) * c2.radius } else { phi2_max * c2.radius };
     let (q1, q2) = (0.25 * c1.radius * c1.angle, 0.25 * c2.radius * c2.angle);
     let t1 = if tolerance[0] > 0.0 { tolerance[0] } else { q1 };
     let t2 = if tolerance[1] > 0.0 { tolerance[1] } else { q2 };
@@ -218,7 +218,8 @@ pub fn arc_arc_blend(
     if norm(sub(center, p)) - big_r > tol {
         return None;
     }
-    let trim = |c: &Circle, rp: [f64; 3]| dot(unit(rp), unit(sub(center, c.center))).clamp(-1.0, 1.0).acos();
+    let trim =
+        |c: &Circle, rp: [f64; 3]| libm::acos(dot(unit(rp), unit(sub(center, c.center))).clamp(-1.0, 1.0));
     let (trim1, trim2) = (trim(&c1, rp1), trim(&c2, rp2));
     if trim1 > phi1_max || trim2 > phi2_max || trim1 >= c1.angle || trim2 >= c2.angle {
         return None;
@@ -227,7 +228,7 @@ pub fn arc_arc_blend(
     let end = add(c2.center, scale(unit(sub(center, c2.center)), c2.radius));
     let u = unit(sub(start, center));
     let w = unit(cross(c1.binormal, sub(start, c1.center)));
-    let sweep = dot(u, unit(sub(end, center))).clamp(-1.0, 1.0).acos();
+    let sweep = libm::acos(dot(u, unit(sub(end, center))).clamp(-1.0, 1.0));
     let v = v_plan.min(req);
     Some((
         Arc3 { start, end, center, u, w, radius: big_r, sweep, v, v_plan, trim: 0.0, a_max },
@@ -288,7 +289,7 @@ pub fn line_arc_blend(
     let rp = sub(p, c);
     // The circle's travel direction at the corner.
     let u_tan2 = unit(cross(g.binormal, rp));
-    let theta_tan = 0.5 * (-dot(u1, u_tan2)).clamp(-1.0, 1.0).acos();
+    let theta_tan = 0.5 * libm::acos((-dot(u1, u_tan2)).clamp(-1.0, 1.0));
     // No arc for a straight (tangent) continuation or a reversal (blendGeom3Init).
     if FRAC_PI_2 - theta_tan < 1e-6 || theta_tan < 1e-6 {
         return None;
@@ -301,7 +302,7 @@ pub fn line_arc_blend(
         return None;
     }
     let l1 = g.line_len.min(g.line_nominal / 2.0);
-    let l2 = if convex { (phi2_max / 4.0).sin() * r } else { phi2_max * r };
+    let l2 = if convex { libm::sin(phi2_max / 4.0) * r } else { phi2_max * r };
     // Each move's tolerance, or a quarter of its nominal length where it has none
     // (tc.c `tcFindBlendTolerance`).
     let (arc_len, q1) = (r * g.angle, 0.25 * g.line_nominal);
@@ -336,7 +337,7 @@ pub fn line_arc_blend(
     if norm(sub(center, p)) - big_r > tol {
         return None;
     }
-    let circle_trim = dot(unit(rp), unit(sub(center, c))).clamp(-1.0, 1.0).acos();
+    let circle_trim = libm::acos(dot(unit(rp), unit(sub(center, c))).clamp(-1.0, 1.0));
     // No more of the circle than its share (tp.c: the trim against phi2_max / phi1_max).
     if circle_trim > phi2_max || circle_trim >= g.angle {
         return None;
@@ -344,7 +345,7 @@ pub fn line_arc_blend(
     let start = sub(p, scale(u1, d_l));
     let end = add(c, scale(unit(sub(center, c)), r));
     let u = unit(sub(start, center));
-    let sweep = dot(u, unit(sub(end, center))).clamp(-1.0, 1.0).acos();
+    let sweep = libm::acos(dot(u, unit(sub(end, center))).clamp(-1.0, 1.0));
     let v = v_plan.min(req).min(along(u1, rate));
     Some(LineArcBlend {
         arc: Arc3 { start, end, center, u, w: u1, radius: big_r, sweep, v, v_plan, trim: d_l, a_max },
@@ -379,6 +380,22 @@ mod tests {
 
     const MM: f64 = 1e6;
 
+    /// g64_arcs' first corner (`G1 X10` from X0, then `G2 X20 Y0 I5 J0`, a half circle of R5
+    /// about X15) with the line coming in along `u_line`.
+    fn first_corner(u_line: [f64; 3]) -> LineCircle {
+        LineCircle {
+            corner: [10.0 * MM, 0.0, 0.0],
+            u_line,
+            line_len: 10.0 * MM,
+            line_nominal: 10.0 * MM,
+            center: [15.0 * MM, 0.0, 0.0],
+            radius: 5.0 * MM,
+            binormal: [0.0, 0.0, -1.0],
+            angle: std::f64::consts::PI,
+            angle_share: 1.0 / 3.0,
+        }
+    }
+
     /// g64_arcs' first corner: `G1 X10` (from X0) at F600, then `G2 X20 Y0 I5 J0` (a half circle
     /// of R5 about X15), 508 mm/s² and 30.48 mm/s per axis, the feed override's top 1.2. By
     /// hand from blendmath.c: concave (the centre ahead of the line), θ = 45°, L1 = 5, L2 = π/3·5,
@@ -388,17 +405,7 @@ mod tests {
     /// circle's trim atan(R / (5 + d_L)) = 0.0674 rad.
     #[test]
     fn the_g64_arcs_corner_is_what_blendmath_gives() {
-        let g = LineCircle {
-            corner: [10.0 * MM, 0.0, 0.0],
-            u_line: [1.0, 0.0, 0.0],
-            line_len: 10.0 * MM,
-            line_nominal: 10.0 * MM,
-            center: [15.0 * MM, 0.0, 0.0],
-            radius: 5.0 * MM,
-            binormal: [0.0, 0.0, -1.0],
-            angle: std::f64::consts::PI,
-            angle_share: 1.0 / 3.0,
-        };
+        let g = first_corner([1.0, 0.0, 0.0]);
         let (rate, acc) = ([30.48; 3], [508e-6; 3]);
         let b = line_arc_blend(&g, rate, acc, [0.0; 2], 10.0, 1.2).expect("a blend");
         let a = &b.arc;
@@ -500,17 +507,7 @@ mod tests {
     fn a_small_kink_is_a_tangent_join_not_an_arc() {
         let g = |deg: f64| {
             let a = deg.to_radians();
-            LineCircle {
-                corner: [10.0 * MM, 0.0, 0.0],
-                u_line: [-a.sin(), a.cos(), 0.0],
-                line_len: 10.0 * MM,
-                line_nominal: 10.0 * MM,
-                center: [15.0 * MM, 0.0, 0.0],
-                radius: 5.0 * MM,
-                binormal: [0.0, 0.0, -1.0],
-                angle: std::f64::consts::PI,
-                angle_share: 1.0 / 3.0,
-            }
+            first_corner([-a.sin(), a.cos(), 0.0])
         };
         let blend = |deg| line_arc_blend(&g(deg), [30.48; 3], [508e-6; 3], [0.0; 2], 10.0, 1.2);
         assert_eq!(blend(0.05), None);
@@ -519,17 +516,7 @@ mod tests {
 
     #[test]
     fn a_line_tangent_to_the_circle_has_no_blend() {
-        let g = LineCircle {
-            corner: [10.0 * MM, 0.0, 0.0],
-            u_line: [0.0, 1.0, 0.0],
-            line_len: 10.0 * MM,
-            line_nominal: 10.0 * MM,
-            center: [15.0 * MM, 0.0, 0.0],
-            radius: 5.0 * MM,
-            binormal: [0.0, 0.0, -1.0],
-            angle: std::f64::consts::PI,
-            angle_share: 1.0 / 3.0,
-        };
+        let g = first_corner([0.0, 1.0, 0.0]);
         assert_eq!(line_arc_blend(&g, [30.48; 3], [508e-6; 3], [0.0; 2], 10.0, 1.2), None);
     }
 }

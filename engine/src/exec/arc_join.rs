@@ -41,24 +41,14 @@ fn circle_of(
     c[i1] = center[1] as f64;
     let (sx, sy) = (start[i0] - c[i0], start[i1] - c[i1]);
     let (ex, ey) = (t[i0] - c[i0], t[i1] - c[i1]);
-    let radius = sx.hypot(sy);
+    let radius = libm::hypot(sx, sy);
     // A spiral (the end off the start's circle by more than a µm) is not blended here.
-    if (ex.hypot(ey) - radius).abs() > 1000.0 {
+    if (libm::hypot(ex, ey) - radius).abs() > 1000.0 {
         return None;
     }
-    let tau = std::f64::consts::TAU;
-    let mut sweep = ey.atan2(ex) - sy.atan2(sx);
-    if cw {
-        while sweep >= 0.0 {
-            sweep -= tau;
-        }
-    } else {
-        while sweep <= 0.0 {
-            sweep += tau;
-        }
-    }
+    let mut sweep = super::steps::arc_sweep(libm::atan2(sy, sx), libm::atan2(ey, ex), cw);
     if dist(start, t) < 0.5 {
-        sweep = tau;
+        sweep = std::f64::consts::TAU;
     }
     let mut bin = [0.0; 3];
     bin[i2] = if cw { -1.0 } else { 1.0 };

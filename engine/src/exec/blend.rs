@@ -111,7 +111,7 @@ pub fn blend_arc(
         return None;
     }
     let (u1, u2) = (scale(d1, 1.0 / len1), scale(d2, 1.0 / len2));
-    let theta = 0.5 * (-dot(u1, u2)).clamp(-1.0, 1.0).acos();
+    let theta = 0.5 * libm::acos((-dot(u1, u2)).clamp(-1.0, 1.0));
     // A reversal within 2° stops (tp.c tpSetupTangent); a straight line has no arc.
     if norm(add(u1, u2)) < std::f64::consts::PI * 2.0 / 180.0 || std::f64::consts::FRAC_PI_2 - theta < 1e-6 {
         return None;
@@ -133,9 +133,9 @@ pub fn blend_arc(
     let t2 = if tolerance[1] > 0.0 { tolerance[1] } else { 0.25 * len2 };
     let tolerance = t1.min(t2).min(0.25 * nominal1).min(0.25 * len2);
     let (l1, l2) = (len1.min(0.5 * nominal1), 0.5 * len2);
-    let d_tol = theta.cos() * tolerance / (1.0 - theta.sin());
+    let d_tol = libm::cos(theta) * tolerance / (1.0 - libm::sin(theta));
     let d_geom = l1.min(l2).min(d_tol);
-    let r_geom = theta.tan() * d_geom;
+    let r_geom = libm::tan(theta) * d_geom;
     let n = cross(u1, u2);
     let n = scale(n, 1.0 / norm(n).max(1e-30));
     let a_max = inscribed(n, acc);
@@ -143,10 +143,10 @@ pub fn blend_arc(
     let phi = std::f64::consts::PI - 2.0 * theta;
     // The speed the moves allow at the corner.
     let phi_eff = phi.min(std::f64::consts::PI * 0.49);
-    let vm1 = v1max.min(v2max / phi_eff.cos());
-    let vm2 = v2max.min(v1max / phi_eff.cos());
+    let vm1 = v1max.min(v2max / libm::cos(phi_eff));
+    let vm2 = v2max.min(v1max / libm::cos(phi_eff));
     let base = norm(sub(scale(u2, vm2), scale(u1, vm1)));
-    let v_alt = if base > 0.0 { vm1 * vm2 * phi.sin() / base } else { 0.0 };
+    let v_alt = if base > 0.0 { vm1 * vm2 * libm::sin(phi) / base } else { 0.0 };
     let v_goal = goal1.max(goal2).min(v_alt.max(inscribed(n, rate)));
     let v_plan = (a_n * r_geom).sqrt().min(v_goal);
     // The radius a parabolic blend at a/2 reaching v_plan would take, over the arc's angle.
@@ -157,7 +157,7 @@ pub fn blend_arc(
     if !(radius > 1.0 && v_plan > 0.0) {
         return None;
     }
-    let trim = radius / theta.tan();
+    let trim = radius / libm::tan(theta);
     // The speed the arc runs at: what the first move reaches by its start and what lets the
     // second move stop by its end.
     let reach = (v0 * v0 + 2.0 * a1 * (len1 - trim).max(0.0)).sqrt();
@@ -170,7 +170,7 @@ pub fn blend_arc(
     }
     let normal = sub(u2, u1);
     let normal = scale(normal, 1.0 / norm(normal).max(1e-30));
-    let center = add(p1, scale(normal, radius / theta.sin()));
+    let center = add(p1, scale(normal, radius / libm::sin(theta)));
     let start = sub(p1, scale(u1, trim));
     let end = add(p1, scale(u2, trim));
     let u = scale(sub(start, center), 1.0 / radius);

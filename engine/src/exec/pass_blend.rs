@@ -126,7 +126,7 @@ impl Exec<'_> {
         let geom = |s: f64| -> [f64; 3] {
             if s <= l_arc {
                 let phi = s / a.radius;
-                let (c, sn) = (phi.cos(), phi.sin());
+                let (c, sn) = (libm::cos(phi), libm::sin(phi));
                 std::array::from_fn(|i| a.center[i] + a.radius * (c * a.u[i] + sn * a.w[i]))
             } else {
                 let r = (s - l_arc).min(l_taper);

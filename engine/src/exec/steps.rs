@@ -420,16 +420,7 @@ impl Exec<'_> {
         let a0 = libm::atan2(sy, sx);
         let a1 = libm::atan2(ey, ex);
         let tau = std::f64::consts::TAU;
-        let mut sweep = a1 - a0;
-        if cw {
-            while sweep >= 0.0 {
-                sweep -= tau;
-            }
-        } else {
-            while sweep <= 0.0 {
-                sweep += tau;
-            }
-        }
+        let mut sweep = arc_sweep(a0, a1, cw);
         let full_turn = (target[i0] == s[i0] && target[i1] == s[i1]) as u8;
         if full_turn == 0 && sweep.abs() > tau - 1e-12 {
             sweep = 0.0;
@@ -668,4 +659,22 @@ fn path_len(a: &Pos, b: &Pos) -> f64 {
         s += d * d;
     }
     s.sqrt()
+}
+
+/// The signed angle an arc turns from the angle `a0` to `a1` about its centre: negative clockwise
+/// (G2), positive counter-clockwise (G3), never zero (a whole turn when they are equal). Two
+/// iterations at most: `a1 - a0` from two `atan2` lies in (−2π, 2π].
+pub(crate) fn arc_sweep(a0: f64, a1: f64, cw: bool) -> f64 {
+    let tau = std::f64::consts::TAU;
+    let mut sweep = a1 - a0;
+    if cw {
+        while sweep >= 0.0 {
+            sweep -= tau;
+        }
+    } else {
+        while sweep <= 0.0 {
+            sweep += tau;
+        }
+    }
+    sweep
 }
