@@ -345,15 +345,7 @@ impl<'r, 'a> Comparator<'r, 'a> {
         m: String,
     ) {
         let rule = self.attribute_now(topic, t);
-        let d = Divergence {
-            rule: String::new(),
-            check: check.into(),
-            what,
-            t_us: Some(t),
-            expected: e,
-            actual: a,
-            margin: m,
-        };
+        let d = Divergence::found(check, what, t, e, a, m);
         self.push_attributed(d, rule, topic, false);
     }
 

@@ -299,14 +299,6 @@ fn divergence(
     a: String,
     m: String,
 ) -> (Divergence, Option<String>, Topic) {
-    let d = Divergence {
-        rule: String::new(),
-        check: check.into(),
-        what,
-        t_us: Some(t),
-        expected: e,
-        actual: a,
-        margin: m,
-    };
+    let d = Divergence::found(check, what, t, e, a, m);
     (d, c.attribute_now(topic, t), topic)
 }

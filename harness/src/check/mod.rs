@@ -68,6 +68,20 @@ pub struct Divergence {
     pub margin: String,
 }
 
+impl Divergence {
+    /// A divergence found at `t` µs by the comparison `check`, its rule not yet attributed.
+    pub(crate) fn found(
+        check: &str,
+        what: String,
+        t: i64,
+        expected: String,
+        actual: String,
+        margin: String,
+    ) -> Self {
+        Divergence { rule: String::new(), check: check.into(), what, t_us: Some(t), expected, actual, margin }
+    }
+}
+
 /// One point of a plotted series (reference time base).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Point {
