@@ -17,7 +17,15 @@ fn corpus(name: &str) -> String {
 /// The end point (inch) of every rapid, feed, arc and synchronised stroke the program plans, with
 /// `T` for a traverse and `F` for a feed; moves that go nowhere are left out.
 fn moves(text: &str) -> Vec<(char, [f64; 3])> {
-    let m = Machine::new("linuxcnc").unwrap();
+    moves_with(text, &[])
+}
+
+/// [`moves`] with parameters set.
+fn moves_with(text: &str, params: &[(&str, f64)]) -> Vec<(char, [f64; 3])> {
+    let mut m = Machine::new("linuxcnc").unwrap();
+    for (id, v) in params {
+        m.params.set(id, None, *v).unwrap();
+    }
     let p = m.parse(text).unwrap();
     let mut interp = m.dialect.interpreter(&m.params);
     let mut steps = Vec::new();
@@ -114,7 +122,7 @@ fn g17_g98_g84_matches_linuxcnc_expected_trace() {
 }
 
 /// `tests/interp/g84/g18/g99/expected`; `P` marks LinuxCNC's permuted G84 feed points
-/// (`cycle_feed(block, plane, y, bottom_z, x)` in the XZ plane, DEC-84).
+/// (`cycle_feed(block, plane, y, bottom_z, x)` in the XZ plane, DEC-166).
 const G18_G99: &[(char, [f64; 3])] = &[
     ('T', [0., 2., 0.]),
     ('T', [1., 2., 1.]),
@@ -155,19 +163,31 @@ const G18_G99: &[(char, [f64; 3])] = &[
     ('P', [5., 2., 32.]),
 ];
 
-/// LCNC-CYC-05: in the XZ plane under G99 every traverse and the G81 feed are LinuxCNC's; each
-/// G84 feed goes to the point LinuxCNC means: its printed (x, y, z) is the intended (y, z, x), so
-/// the intended point is (z, x, y) of the printed one.
+/// LCNC-CYC-05, DEC-166: in the XZ plane under G99 every move is where LinuxCNC puts it, its
+/// permuted G84 feed points too (`nc.g74_g84_plane_points` 1, the default).
 #[test]
-fn g18_g99_g84_matches_linuxcnc_expected_trace_but_its_permuted_feeds() {
+fn g18_g99_g84_matches_linuxcnc_expected_trace() {
     let got = moves(&corpus("LinuxCNC__linuxcnc__g18-g99-g84.ngc"));
+    assert_eq!(got.len(), G18_G99.len(), "{got:?}");
+    for (i, ((k, p), (wk, wp))) in got.iter().zip(G18_G99).enumerate() {
+        let wk = if *wk == 'P' { 'F' } else { *wk };
+        assert!(*k == wk && close(*p, *wp), "move {i}: {k} {p:?}, LinuxCNC {wk} {wp:?}");
+    }
+}
+
+/// LCNC-CYC-05, DEC-84: with `nc.g74_g84_plane_points` 0 each G84 feed goes to the point the
+/// manual means: LinuxCNC's printed (x, y, z) is the intended (y, z, x), so the intended point is
+/// (z, x, y) of the printed one; every other move is LinuxCNC's.
+#[test]
+fn g18_g99_g84_along_the_tool_axis_when_the_manual_is_asked_for() {
+    let got = moves_with(&corpus("LinuxCNC__linuxcnc__g18-g99-g84.ngc"), &[("nc.g74_g84_plane_points", 0.0)]);
     assert_eq!(got.len(), G18_G99.len(), "{got:?}");
     for (i, ((k, p), (wk, wp))) in got.iter().zip(G18_G99).enumerate() {
         let (wk, wp) = match wk {
             'P' => ('F', [wp[2], wp[0], wp[1]]),
             k => (*k, *wp),
         };
-        assert!(*k == wk && close(*p, wp), "move {i}: {k} {p:?}, LinuxCNC (unpermuted) {wk} {wp:?}");
+        assert!(*k == wk && close(*p, wp), "move {i}: {k} {p:?}, the manual's {wk} {wp:?}");
     }
 }
 

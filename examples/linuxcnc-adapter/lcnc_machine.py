@@ -49,6 +49,7 @@ DEFAULTS = {
     "plc.fin_timeout_ms": 10000.0,
     "plc.zsp_ms": 8.0,
     "nc.trajectory_planner": 210.0,
+    "nc.g74_g84_plane_points": 1.0,
 }
 PER_AXIS = {"nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm"}
 AXES = "XYZ"
@@ -60,6 +61,8 @@ FIXED = {
     "nc.rigid_overshoot_pitches": "LinuxCNC's G33.1 has no overshoot allowance setting",
     "nc.feed_override_step_pct": "LinuxCNC's feed override is continuous (no switch steps)",
     "plc.fin_ms": "LinuxCNC has no M function completion (FIN) handshake",
+    "nc.g74_g84_plane_points": "LinuxCNC's G84/G74 in G18/G19 always feeds to its permuted points "
+    "(interp_cycles.cc, DEC-166), never along the manual's tool axis",
 }
 # A time constant of 0 (no ramp) as an acceleration LinuxCNC accepts.
 NO_RAMP_ACC = 1.0e6

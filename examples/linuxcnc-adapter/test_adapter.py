@@ -207,6 +207,7 @@ class MachineConfig(unittest.TestCase):
             ([{"id": "nc.rapid_mm_min", "axis": "Z", "value": 3000}], "slowest axis gives 3000"),
             ([{"id": "plc.fin_ms", "value": 50}], "no M function completion"),
             ([{"id": "nc.rigid_overshoot_pitches", "value": 5}], "overshoot"),
+            ([{"id": "nc.g74_g84_plane_points", "value": 0}], "permuted points"),
             ([{"id": "271", "value": 1}], "no LinuxCNC setting"),
         ]:
             with self.assertRaises(lcnc_machine.NotApplicable) as e:

@@ -15,19 +15,8 @@ fn data() -> PathBuf {
 }
 
 /// Recordings known to diverge (set/name), each with its reason: a ratchet, taken off the list
-/// when it becomes conformant.
-const EXPECTED_DIVERGENT: [(&str, &str); 2] = [
-    (
-        "debian-2.9-exact-stop/g84_g18_g61_1",
-        "the permuted G18 G84 feed points of debian-2.9/g84_g18, under exact stop too (DEC-84)",
-    ),
-    (
-        "debian-2.9/g84_g18",
-        "LinuxCNC's G18 G84 feeds to permuted points (X = Y bottom, Y = hole Z, Z = hole X) in real \
-         motion too, against its manual's tool axis; DEC-84 keeps the manual's; conformant to \
-         rs274's own moves (as-run/g84_g18_rs274.ngc, test below)",
-    ),
-];
+/// when it becomes conformant. Empty since DEC-166 (the two g84_g18 recordings).
+const EXPECTED_DIVERGENT: [(&str, &str); 0] = [];
 
 /// The machine each set of recordings was made on: Debian's LinuxCNC 2.9 (its planner,
 /// `nc.trajectory_planner` 209, DEC-163) or the source build after 2.9 (the default planner).
@@ -39,14 +28,29 @@ fn params_of(set: &str) -> &'static str {
     }
 }
 
-/// The Debian 2.9 divergences are what their reasons say: g84_g18 is conformant to rs274's own
-/// canonical moves for G18 G84, written out with their path control modes, under 2.9's planner.
-/// Its first corner turns on the small arc of the tolerance the session's earlier canned cycles
-/// left (`G64 P0.0254` in the file, DEC-164): without it the arc is 1.05 mm at 21.5 mm/s and Y
-/// leaves the band by 0.59 mm. Anything else that differed would fail here.
+/// g84_g18 (G98 G84 in G18, two holes; G64 and G61.1): LinuxCNC 2.9 feeds to its permuted
+/// points in real motion as rs274 prints them (X = the Y bottom, Y = the hole's Z, Z = the hole's
+/// X), and the reference does so by default (DEC-166): conformant. Asked for the manual's tool
+/// axis (`nc.g74_g84_plane_points` 0, DEC-84) it is not: the parameter is what makes them so.
+/// rs274's own moves written out (`as-run/g84_g18_rs274.ngc`) are conformant too; its first
+/// corner turns on the small arc of the tolerance the session's earlier canned cycles left (`G64
+/// P0.0254` in the file, DEC-164): without it the arc is 1.05 mm at 21.5 mm/s and Y leaves the
+/// band by 0.59 mm.
 #[test]
-fn the_debian_2_9_divergences_are_what_their_reasons_say() {
-    let (trace, params) = ("recordings/debian-2.9/csv/g84_g18.csv", "linuxcnc-sim-2.9.params.yaml");
+fn g84_in_g18_feeds_to_linuxcnc_s_permuted_points() {
+    let params = "linuxcnc-sim-2.9.params.yaml";
+    let manual = std::env::temp_dir().join(format!("lcnc-g84-manual-{}.yaml", std::process::id()));
+    let base = std::fs::read_to_string(data().join(params)).unwrap();
+    std::fs::write(&manual, format!("{base}  nc.g74_g84_plane_points: 0\n")).unwrap();
+    for (set, name) in [("debian-2.9", "g84_g18"), ("debian-2.9-exact-stop", "g84_g18_g61_1")] {
+        let (program, trace) = (format!("programs/{name}.ngc"), format!("recordings/{set}/csv/{name}.csv"));
+        let (code, text) = check_with(&program, params, &trace);
+        assert_eq!(code, 0, "{set}/{name}, LinuxCNC's points:\n{text}");
+        let (code, text) = check_with(&program, manual.to_str().unwrap(), &trace);
+        assert_eq!(code, 1, "{set}/{name}, the manual's tool axis:\n{text}");
+    }
+    let _ = std::fs::remove_file(&manual);
+    let trace = "recordings/debian-2.9/csv/g84_g18.csv";
     let (code, text) = check_with("as-run/g84_g18_rs274.ngc", params, trace);
     assert_eq!(code, 0, "{text}");
     let program = std::fs::read_to_string(data().join("as-run/g84_g18_rs274.ngc")).unwrap();

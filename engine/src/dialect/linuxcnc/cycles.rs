@@ -143,6 +143,25 @@ pub fn canned(m: &mut Machine, g: u32, b: &Eb, out: &mut Vec<Step>) -> Result<()
     Ok(())
 }
 
+/// LinuxCNC's G84/G74 feed point in the XZ or YZ plane at `w` (work nm) on the tool axis, for the
+/// hole at `at_r` (machine nm): `convert_cycle_g74_g84` passes `cycle_feed` its arguments out of
+/// order, so in G18 X takes the tool axis' value, Y the hole's Z and Z the hole's X; in G19 X the
+/// hole's Z, Y the tool axis' value and Z the hole's Y (DEC-166; the rs274 oracle's
+/// `g18-g99-g84`, `g19-g98-g84`; `testdata/linuxcnc` g84_g18 in real motion).
+fn permuted(m: &Machine, plane: Plane, at_r: Pos, w: Nm) -> Pos {
+    let hole = |a: usize| at_r[a].saturating_sub(m.off[a]);
+    let work = match plane {
+        Plane::Zx => [w, hole(2), hole(0)],
+        Plane::Yz => [hole(2), w, hole(1)],
+        Plane::Xy => [hole(0), hole(1), w],
+    };
+    let mut p = at_r;
+    for (a, v) in work.into_iter().enumerate() {
+        p[a] = v.saturating_add(m.off[a]);
+    }
+    p
+}
+
 /// What one hole does, with the words it needs checked.
 struct Body {
     g: u32,
@@ -283,16 +302,27 @@ impl Body {
             740 | 840 => {
                 // LCNC-TAP-01: overrides off, feed in, reverse, dwell, feed out to the clearance.
                 let (cut, back) = if self.g == 840 { (3, 4) } else { (4, 3) };
+                // In G18 and G19 LinuxCNC feeds to its permuted point (DEC-166) unless the
+                // manual's tool axis is asked for (DEC-84).
+                let point = |m: &Machine, w: Nm| match m.plane {
+                    Plane::Xy => level(at_r, w),
+                    _ if !m.cfg.tap_permuted => level(at_r, w),
+                    plane => permuted(m, plane, at_r, w),
+                };
                 out.push(Step::OverrideLock(true));
-                m.feed_to(level(at_r, bottom), out);
+                m.feed_to(point(m, bottom), out);
                 out.push(spindle_m(5));
                 out.push(spindle_m(back));
                 dwell(out);
                 out.push(Step::Phase(Phase::Retract));
-                m.feed_to(level(at_r, clear), out);
+                m.feed_to(point(m, clear), out);
                 out.push(spindle_m(5));
                 out.push(spindle_m(cut));
                 out.push(Step::OverrideLock(false));
+                // The interpreter takes the tool to be over the hole at the clearance level, as
+                // LinuxCNC's does (its next move starts from there in rs274, from the permuted
+                // point on the machine).
+                m.pos = level(at_r, clear);
             }
             870 => {
                 let Some((o, top)) = self.g87 else { return };

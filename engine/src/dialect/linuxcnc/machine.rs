@@ -125,6 +125,9 @@ pub struct Cfg {
     /// LinuxCNC 2.9's planner (`nc.trajectory_planner` 209): the path control mode is passed on
     /// to the executor (`Step::PathMode`, DEC-163).
     pub(super) tp_2_9: bool,
+    /// G84/G74 in G18 and G19 feed to LinuxCNC's permuted point (`nc.g74_g84_plane_points` 1,
+    /// DEC-166); 0: along the plane's tool axis at the hole, as its manual says.
+    pub(super) tap_permuted: bool,
 }
 
 impl Cfg {
@@ -134,6 +137,7 @@ impl Cfg {
             max_rpm: p.get("nc.spindle_max_rpm").max(1.0),
             overshoot_pitches: p.get("nc.rigid_overshoot_pitches"),
             tp_2_9: p.get("nc.trajectory_planner") < 209.5,
+            tap_permuted: p.get("nc.g74_g84_plane_points") > 0.5,
         }
     }
 }
