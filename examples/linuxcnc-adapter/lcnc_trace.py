@@ -624,11 +624,15 @@ class Trace:
     def phases(self, p, r, t, kind):
         if not kind or (self.abort_sent is not None and r["cycle"] >= self.abort_sent):
             return
-        ta = tool_axis(self.prog.plane.get(self.cur, 17))
+        plane = self.prog.plane.get(self.cur, 17)
+        ta = tool_axis(plane)
         d = r[ta] - p[ta]
         moving = any(abs(r[a] - p[a]) > 1e-9 for a in "XYZ")
         mtype = int(r["mtype"])
         ph = self.phase
+        if kind in ("cycle74", "cycle84") and plane != 17:
+            self.permuted_tap_phases(r, t, ph, moving, mtype)
+            return
         if kind == "g33":
             # as the reference: a G33 line is its cutting phase from its start (the index wait
             # included) to the next line
@@ -686,6 +690,32 @@ class Trace:
         elif ph == "dwell":
             if moving or r["cycle"] - self.still_since >= int(round(dwell_p * 1e6 / self.P)):
                 self.set_phase(t, "retract")
+
+    def permuted_tap_phases(self, r, t, ph, moving, mtype):
+        """G84/G74 in G18/G19: LinuxCNC feeds in and out to its permuted points (DEC-166), which
+        need not move along the plane's tool axis, nor down it: the feed in is the cutting (from
+        its first period), its standstill at the bottom the dwell (P) or the retract, the feed
+        out the retract, a traverse after it the next hole's positioning, as the reference
+        marks them."""
+        dwell_p = self.prog.p.get(self.cur, 0.0)
+        if moving:
+            self.hold_still = False
+        elif getattr(self, "pause_pending", False) or self.levels["SPL"] or getattr(self, "hold_still", False):
+            self.hold_still = True
+            return
+        if ph == "positioning" and moving and mtype == MOTION_FEED:
+            self.set_phase(t, "cutting")
+        elif ph == "cutting" and not moving:
+            if dwell_p > 0:
+                self.set_phase(t, "dwell")
+                self.still_since = r["cycle"]
+            else:
+                self.set_phase(t, "retract")
+        elif ph == "dwell":
+            if moving or r["cycle"] - self.still_since >= int(round(dwell_p * 1e6 / self.P)):
+                self.set_phase(t, "retract")
+        elif ph == "retract" and moving and mtype != MOTION_FEED:
+            self.set_phase(t, "positioning")
 
     def finish_program(self, end_c, reason):
         """At the end: the cycle left, the program end's block and M2/M30 when LinuxCNC reached it."""

@@ -503,6 +503,30 @@ class Recording(unittest.TestCase):
         ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
         self.assertEqual([e["name"] for e in ev if e["kind"] == "phase"], ["positioning", "cutting"])
 
+    def test_a_permuted_tap_in_g19_has_the_references_phases(self):
+        # DEC-166 (cycles/g99_planes): LinuxCNC's G84 in G19 feeds to its permuted point, X up
+        # and Y down (the tool axis X goes up while it cuts); then the feed out along Y, and the
+        # next hole's traverse: cutting from the feed's first period, retract at the bottom's
+        # standstill, positioning with the traverse, as the reference marks them
+        prog = "G19 G21 M3 S500 F200\nG0 X20 Y0 Z0\nG84 Y10 Z15 X-5 R5 L2\nM2\n"
+        pts = [(20, 0, 0), (20, 10, 15), (5, 10, 15)]  # traverses to the hole and down to R
+        cut = [(5 + k, 10 - 1.5 * k, 15 - 0.5 * k) for k in range(1, 11)]  # to (15, -5, 10)
+        out = [(15, -5 + k, 10) for k in range(1, 11)]  # the feed out to (15, 5, 10)
+        rows = [row(c) for c in range(100, 110)]
+        c = 110
+        for pts_, mtype in ((pts, 1), (cut, 2), ([cut[-1]] * 5, 2), (out, 2), ([(20, 5, 10)], 1)):
+            for x, y, z in pts_:
+                r = row(c, z=z, line=3, mtype=mtype, rpm=500, cmd=500, on=1, fwd=1)
+                r["X"], r["Y"] = x, y
+                rows.append(r)
+                c += 1
+        agent = dict(self.AGENT, end={"reason": "time_limit", "cycle": c - 1, "limit_cycles": c - 111})
+        ev = lcnc_trace.Trace(prog, rows, agent, self.CFG, 1000).build()
+        got = [(e["t_us"] // 1000, e["name"]) for e in ev if e["kind"] == "phase"]
+        self.assertEqual([n for _, n in got], ["positioning", "cutting", "retract", "positioning"], got)
+        self.assertEqual(got[1][0], 3)  # the first feed period
+        self.assertEqual(got[2][0], 13)  # the first still period at the bottom
+
     def test_a_feed_hold_in_a_drilling_cycle_is_not_its_bottom(self):
         # I1 (cycles/g81_feed_hold): held in the feed in, the drill stands; G81 (no dwell) goes to
         # its retract only when it stands at the bottom, not in a hold

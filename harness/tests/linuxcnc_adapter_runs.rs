@@ -94,6 +94,7 @@ const KEPT: &[Kept] = &[
     Kept { scenario: "g76/single_block", file: "g76_single_block.jsonl.gz", guards: "DEC-158, DEC-160" },
     Kept { scenario: "cycles/g88", file: "cycles_g88.jsonl.gz", guards: "DEC-151" },
     Kept { scenario: "g76/passes", file: "g76_passes.jsonl.gz", guards: "DEC-147" },
+    Kept { scenario: "cycles/g99_planes", file: "cycles_g99_planes.jsonl.gz", guards: "DEC-166" },
 ];
 
 fn root() -> PathBuf {
@@ -633,4 +634,15 @@ fn dec147_a_g76_pass_blended_through_its_taper_joints_fails() {
     let v = verdict_with("g76/passes", file, |s, _| with_steps(s, blended));
     // 0.247 mm out of sync 17 ms into the taper of every pass (DEC-147: 0.251 mm).
     fails_with(&v, "LCNC-G76-01 [CHK-SYNC-01] Z synchronisation with the spindle, thread pass 1 (lead)");
+}
+
+/// DEC-166: LinuxCNC's G84 in G19 (`cycles/g99_planes`, hole Y10 Z15 down to X-5) feeds to its
+/// permuted point X15 Y-5 Z10 and back to X15 Y5 Z10. The reference asked for the manual's tool
+/// axis (`nc.g74_g84_plane_points` 0, DEC-84: X-5 Y10 Z15) fails on LinuxCNC's run.
+#[test]
+fn dec166_a_reference_tapping_along_the_manual_s_tool_axis_fails() {
+    let v = verdict_with("cycles/g99_planes", "cycles_g99_planes.jsonl.gz", |s, _| {
+        s.machine.params.set("nc.g74_g84_plane_points", None, 0.0).expect("a linuxcnc parameter");
+    });
+    fails_with(&v, "[CHK-ENV-01] X position envelope");
 }
