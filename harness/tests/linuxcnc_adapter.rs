@@ -20,5 +20,8 @@ fn the_linuxcnc_adapter_maps_parameters_recordings_and_conditions() {
         .expect("python3 runs");
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{text}");
-    assert!(text.contains("Ran 39 tests"), "{text}");
+    // Every test ran (none lost to an import error or a misnamed class).
+    let ran: usize =
+        text.split("Ran ").nth(1).and_then(|s| s.split(' ').next()).and_then(|n| n.parse().ok()).unwrap_or(0);
+    assert!(ran >= 40, "{ran} tests ran:\n{text}");
 }
