@@ -294,7 +294,7 @@ fn linuxcnc_g33_starts_at_the_next_index_pulse() {
 #[test]
 fn linuxcnc_g76_every_pass_starts_at_the_next_index_pulse_on_one_groove() {
     let prog =
-        "G18 G21 G8 M3 S600\nG4 P0.5\nG0 X7 Z3\nG76 P1.5 Z-20 I-1 J0.25 K0.92 R2 Q0 H1 E2 L3\nG0 X20\nM2\n";
+        "G18 G21 G8 M3 S600\nG4 P0.5\nG0 X7 Z3\nG76 P1.5 Z-20 I-1 J0.25 K0.92 R2 Q0 H1 E2 L2\nG0 X20\nM2\n";
     let t = run("linuxcnc", &[], prog, &sampled(InputSchedule::default()));
     assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
     let ps = passes(&t, 2, 1.0);
@@ -303,6 +303,44 @@ fn linuxcnc_g76_every_pass_starts_at_the_next_index_pulse_on_one_groove() {
     // Q0: every pass starts at Z3, so one groove means one lag: 15 mm/s at 1000 mm/s² (0.1125 mm).
     assert!((lag - 112_500.0).abs() < 200.0, "{lag}");
     assert!(waits.iter().all(|w| (0.0..1.0).contains(w)), "{waits:?}");
+}
+
+/// LinuxCNC's G76 with an entry taper (L3): each pass first feeds in along X, synchronised at the
+/// taper's lead and waiting for the index (interp_convert.cc `threading_pass`), then the taper and
+/// the thread track it without a new index. Z therefore starts a fraction of a turn after the
+/// index, but every pass cuts the one groove: Z's travel less lead × revolutions is the same
+/// constant, modulo one lead, on the thread of every pass.
+#[test]
+fn linuxcnc_g76_with_an_entry_taper_feeds_in_synchronised_and_keeps_one_groove() {
+    let prog =
+        "G18 G21 G8 M3 S600\nG4 P0.5\nG0 X7 Z3\nG76 P1.5 Z-20 I-1 J0.25 K0.92 R2 Q0 H1 E2 L3\nG0 X20\nM2\n";
+    let t = run("linuxcnc", &[], prog, &sampled(InputSchedule::default()));
+    assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
+    let ps = passes(&t, 2, 1.0);
+    assert_eq!(ps.len(), 15);
+    // The groove: (lead × revolutions − Z travel) / lead, modulo 1, late in each pass (on the
+    // thread, at speed).
+    let lead = 1.5 * MM;
+    let grooves: Vec<f64> = ps
+        .iter()
+        .map(|p| {
+            let (r, z) = p.moving[p.moving.len() * 2 / 3];
+            ((lead * r - z) / lead).rem_euclid(1.0)
+        })
+        .collect();
+    for g in &grooves {
+        let d = (g - grooves[0]).rem_euclid(1.0);
+        assert!(d.min(1.0 - d) < 1e-3, "{grooves:?}");
+    }
+    // Z waits for the infeed: 1 mm of X at the taper's lead, 1.5 × √(2² + 0.92²) / 2 = 1.651
+    // mm per turn, with its ramp: Z starts over 0.6 of a turn after the index the pass took
+    // (where a rapid infeed had it start at the index itself), and within a turn and a half.
+    let q = 1.0 / 360_000.0;
+    for (k, p) in ps.iter().enumerate() {
+        let index = next_angle(p.at_phase - q, LCNC_INDEX_LATENCY_REV);
+        let late = p.still - index;
+        assert!((0.6..1.5).contains(&late), "pass {k}: Z starts {late} turns after the index");
+    }
 }
 
 /// FNV-1a over the trace: every event, samples with all axes, speed and angle.

@@ -25,6 +25,9 @@ pub(super) struct SyncLock {
     pub(super) angle0: f64,
     /// The sense the spindle turns (±1).
     pub(super) sign: f64,
+    /// The drive axis of the segment the law is counted along (the pass's, or the last tracking
+    /// segment's: each rebases it).
+    pub(super) axis: usize,
     /// The drive axis' position when the pass started, nm.
     pub(super) along0: Nm,
     /// The sense the drive axis travels (±1).
@@ -43,7 +46,7 @@ impl Exec<'_> {
         if self.start_pass_blend(&p) {
             return;
         }
-        if p.law == PassLaw::Segments && p.n > 2 {
+        if matches!(p.law, PassLaw::Segments | PassLaw::SegmentsTracking) && p.n > 2 {
             self.thread_segments(p);
             return;
         }
@@ -98,7 +101,10 @@ impl Exec<'_> {
                     return;
                 }
             }
-            PassLaw::Accelerated { room: None } | PassLaw::Segments | PassLaw::Tracking => {
+            PassLaw::Accelerated { room: None }
+            | PassLaw::Segments
+            | PassLaw::SegmentsTracking
+            | PassLaw::Tracking => {
                 v = v.min(vmax);
                 v_top = v;
             }
@@ -140,16 +146,26 @@ impl Exec<'_> {
                 Profile::catch_up(dist, v, acc, (lag_rev - n0) / rev_us, accel, period, now % period)
             }
             PassLaw::Tracking => {
+                // The revolutions the run has used so far (its ramp's lag and the segments before
+                // this one, each at its own lead), and how far this segment is behind the spindle
+                // at its own lead (LinuxCNC's spindle offset, tp.c: each synchronised segment's
+                // length over its lead added as the next starts). The law is rebased onto this
+                // segment for the next.
                 let behind = self.sync_lock.map(|l| {
-                    let law = l.lead * (angle - l.angle0) * l.sign / 360.0 - l.lag;
-                    law - (start[p.along] - l.along0) as f64 * l.dir
+                    let revs = (angle - l.angle0) * l.sign / 360.0;
+                    let used = (l.lag + (start[l.axis] - l.along0) as f64 * l.dir) / l.lead;
+                    (lead * (revs - used), lead * used)
                 });
-                Profile::tracking(dist, v, behind.unwrap_or(0.0), accel, period, now % period)
+                if let (Some(l), Some((_, lag))) = (self.sync_lock.as_mut(), behind) {
+                    *l = SyncLock { axis: p.along, along0: start[p.along], dir, lead, lag, ..*l };
+                }
+                Profile::tracking(dist, v, behind.map_or(0.0, |b| b.0), accel, period, now % period)
             }
-            PassLaw::Accelerated { .. } | PassLaw::Segments => {
+            PassLaw::Accelerated { .. } | PassLaw::Segments | PassLaw::SegmentsTracking => {
                 self.sync_lock = Some(SyncLock {
                     angle0: angle,
                     sign: rpm.signum(),
+                    axis: p.along,
                     along0: start[p.along],
                     dir,
                     lead,
@@ -203,7 +219,11 @@ impl Exec<'_> {
             let mut knots = [(0.0, 0.0); 4];
             knots[0] = p.knots[k];
             knots[1] = p.knots[k + 1];
-            let law = if k == 0 { PassLaw::Accelerated { room: None } } else { PassLaw::Tracking };
+            let law = if k == 0 && !p.tracks_first() {
+                PassLaw::Accelerated { room: None }
+            } else {
+                PassLaw::Tracking
+            };
             self.steps.push_front(Step::Thread(ThreadPass { target, knots, n: 2, thread: 0, law, ..p }));
         }
     }

@@ -110,10 +110,20 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
     out.push(Step::Rapid { target: at(safe_x, start_z) });
     let e = c.taper.min(end_z.saturating_sub(start_z).saturating_abs());
     let mut z = start_z;
-    // The thread proper follows an entry taper.
-    let thread = usize::from(c.taper_ends & 1 != 0 && e > 0);
-    if c.taper_ends & 1 != 0 && e > 0 {
-        out.push(Step::Rapid { target: at(taper_x, start_z) });
+    // The thread proper follows an entry taper, and the entry taper its infeed: a synchronised
+    // move along X at the taper's lead per revolution of path (interp_convert.cc
+    // `threading_pass`: START_SPEED_FEED_SYNCH(taper_pitch) then STRAIGHT_FEED "in", where
+    // taper_pitch = pitch × √(E² + K²) / E), which waits for the index; the taper and the thread
+    // follow it without a new one.
+    let entry = c.taper_ends & 1 != 0 && e > 0;
+    let thread = usize::from(entry);
+    let mut infeed = None;
+    if entry {
+        if taper_x != safe_x {
+            let taper_lead = c.pitch as f64 * (e as f64).hypot(c.k as f64) / e as f64;
+            let from = at(safe_x, start_z);
+            infeed = ThreadPass::line(from, at(taper_x, start_z), [c.x_axis, c.z_axis], taper_lead, true);
+        }
         push(knot(taper_x, start_z));
         z = start_z.saturating_add(zdir * e);
     } else {
@@ -134,6 +144,9 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
     out.push(Step::AwaitAtSpeed);
     out.push(Step::HoldSuppress(true));
     out.push(Step::Phase(Phase::Cutting));
+    if let Some(infeed) = infeed {
+        out.push(Step::Thread(ThreadPass { alarm: AlarmKind::LcncSpindle, ..infeed }));
+    }
     if n >= 2 && knots[0].0 != knots[n - 1].0 {
         out.push(Step::Thread(ThreadPass {
             target: end,
@@ -146,7 +159,11 @@ fn pass(c: &ThreadG76, depth: Nm, out: &mut Vec<Step>) {
             dlead_nm: 0.0,
             phase_rev: 0.0,
             // Tapers are segments of their own, each ending at rest (DEC-147).
-            law: if n > 2 { PassLaw::Segments } else { PassLaw::Accelerated { room: None } },
+            law: match (n > 2, infeed.is_some()) {
+                (true, true) => PassLaw::SegmentsTracking,
+                (true, false) => PassLaw::Segments,
+                (false, _) => PassLaw::Accelerated { room: None },
+            },
             retract: None,
             alarm: AlarmKind::LcncSpindle,
         }));

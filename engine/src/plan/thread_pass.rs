@@ -38,6 +38,10 @@ pub enum PassLaw {
     /// non-tangent segments); the first starts at the index as `Accelerated { room: None }`, each
     /// next one at once as [`PassLaw::Tracking`].
     Segments,
+    /// [`PassLaw::Segments`] whose first segment tracks too: the run began with an earlier
+    /// synchronised move (LinuxCNC's G76 entry taper: its infeed along X at the taper's lead,
+    /// interp_convert.cc `threading_pass`, before the angled entry).
+    SegmentsTracking,
     /// A synchronised segment after the first of a run (DEC-147): it waits neither for a steady
     /// speed nor for the index, and from rest catches up with the law the first segment settled
     /// on (lead × revolutions since its start − its ramp's lag), as LinuxCNC's position
@@ -118,6 +122,11 @@ impl ThreadPass {
             retract: None,
             alarm: AlarmKind::FeedZero,
         })
+    }
+
+    /// Whether its first segment tracks the run before it instead of waiting for the index.
+    pub fn tracks_first(&self) -> bool {
+        self.law == PassLaw::SegmentsTracking
     }
 
     /// The drive axis' travel from the pass' start to its end, nm.

@@ -296,8 +296,11 @@ impl Body {
                 if matches!(out.last(), Some(Step::Rapid { target }) if *target == at_r) {
                     out.pop();
                 }
-                m.pos = at_r;
-                m.rapid(level(at_r, clear), out);
+                // From the bottom, where the builder's steps left the tool (under G99 the
+                // clearance level is R itself: not a move of no length).
+                let up = level(at_r, clear);
+                out.push(Step::Rapid { target: up });
+                m.pos = up;
             }
             740 | 840 => {
                 // LCNC-TAP-01: overrides off, feed in, reverse, dwell, feed out to the clearance.
@@ -322,7 +325,9 @@ impl Body {
                 // The interpreter takes the tool to be over the hole at the clearance level, as
                 // LinuxCNC's does (its next move starts from there in rs274, from the permuted
                 // point on the machine).
-                m.pos = level(at_r, clear);
+                let over = level(at_r, clear);
+                m.astray = m.pos != over;
+                m.pos = over;
             }
             870 => {
                 let Some((o, top)) = self.g87 else { return };
@@ -372,6 +377,7 @@ impl Body {
                         out.push(spindle_m(5));
                         out.push(Step::Stop { optional: false });
                         m.pos = level(at_r, clear);
+                        m.astray = true;
                         out.push(spindle_m(fwd));
                     }
                     890 => m.feed_to(level(at_r, clear), out),

@@ -149,6 +149,10 @@ pub struct Machine {
     pub cfg: Cfg,
     /// Where the machine stands (machine nm).
     pub pos: Pos,
+    /// The tool stands elsewhere than [`Machine::pos`], where the interpreter takes it to be
+    /// (G88's bottom, DEC-151; LinuxCNC's permuted tap point, DEC-166): the next move is queued
+    /// even to `pos` itself.
+    pub astray: bool,
     /// G92 offsets (machine − program), nm.
     pub off: [Nm; 3],
     /// G20.
@@ -204,6 +208,7 @@ impl Machine {
         Machine {
             cfg: Cfg::from(p),
             pos: [0; 6],
+            astray: false,
             off: [0; 3],
             inch: false,
             absolute: true,
@@ -282,15 +287,25 @@ impl Machine {
     }
 
     /// Appends a rapid and moves there.
+    ///
+    /// A move of no length is not queued: LinuxCNC's planner drops it (tp.c `tpAddLine`,
+    /// TP_ERR_ZERO_LENGTH), so it neither ends a blend nor counts as the move that follows.
     pub fn rapid(&mut self, target: Pos, out: &mut Vec<Step>) {
-        out.push(Step::Rapid { target });
+        if target != self.pos || self.astray {
+            out.push(Step::Rapid { target });
+        }
         self.pos = target;
+        self.astray = false;
     }
 
     /// Appends a feed move at the cutting feed and moves there.
+    /// (None of no length, as [`Machine::rapid`].)
     pub fn feed_to(&mut self, target: Pos, out: &mut Vec<Step>) {
-        out.push(Step::Feed { target, feed: self.feed_rate() });
+        if target != self.pos || self.astray {
+            out.push(Step::Feed { target, feed: self.feed_rate() });
+        }
         self.pos = target;
+        self.astray = false;
     }
 
     /// The target of a motion: each of X, Y, Z given (absolute or incremental) or kept.
@@ -770,6 +785,7 @@ impl Machine {
     /// CNC reset: the position is kept, cycles and the end flag cleared.
     pub fn reset(&mut self, pos: Pos) {
         self.pos = pos;
+        self.astray = false;
         self.motion = None;
         self.cyc.il = None;
         self.ended = false;
