@@ -50,6 +50,7 @@ DEFAULTS = {
     "plc.zsp_ms": 8.0,
     "nc.trajectory_planner": 210.0,
     "nc.g74_g84_plane_points": 1.0,
+    "nc.startup_g64_p_mm": -1.0,
 }
 PER_AXIS = {"nc.rapid_mm_min", "nc.rapid_ramp_ms", "nc.backlash_mm"}
 AXES = "XYZ"
@@ -172,6 +173,16 @@ def machine_config(params, path_mode="G64", planner="default", runs_planner=None
             f"nc.trajectory_planner = {v['nc.trajectory_planner']:g}, while this LinuxCNC runs the "
             f"planner {runs_planner:g} (DEC-163): give conform --params with nc.trajectory_planner: "
             f"{runs_planner:g} (scripts/linuxcnc-conform does)")
+    # Under 2.9's planner the power-on G64 P is the tolerance canon and the planner start with,
+    # and the one a canned cycle restores (DEC-169): the reference must start with this LinuxCNC's.
+    if runs_planner == 209.0 and path_mode.startswith("G64"):
+        m = re.search(r"P([0-9.]+)", path_mode)
+        want = float(m.group(1)) if m else 0.0
+        if abs(v["nc.startup_g64_p_mm"] - want) > 1e-9:
+            raise NotApplicable(
+                f"nc.startup_g64_p_mm = {v['nc.startup_g64_p_mm']:g}, while this LinuxCNC powers on in "
+                f"{path_mode} (DEC-169): give conform --params with nc.startup_g64_p_mm: {want:g} "
+                f"(scripts/linuxcnc-conform does)")
     period_us = int(v["nc.period_us"])
     if period_us not in (1000, 2000, 4000, 8000):
         raise NotApplicable(f"nc.period_us = {period_us}: not a servo period of the model")

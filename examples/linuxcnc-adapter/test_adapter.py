@@ -89,7 +89,10 @@ class MachineConfig(unittest.TestCase):
             self.assertGreaterEqual(len(got), 9, got)
             for pid, value in got.items():
                 with self.subTest(params=params, id=pid):
-                    self.assertEqual(value, want[pid])
+                    if pid == "nc.startup_g64_p_mm":
+                        self.assertEqual(value, 0.0)  # the startup code's G64, without P
+                    else:
+                        self.assertEqual(value, want[pid])
             self.assertIn("setp limit_speed.maxv", hal)
 
     def test_the_spindle_ramp_is_the_hals(self):
@@ -200,7 +203,16 @@ class MachineConfig(unittest.TestCase):
         with self.assertRaises(lcnc_machine.NotApplicable) as e:
             lcnc_machine.machine_config([], runs_planner=209.0)
         self.assertIn("nc.trajectory_planner: 209", str(e.exception))
-        lcnc_machine.machine_config([{"id": "nc.trajectory_planner", "value": 209}], runs_planner=209.0)
+        with self.assertRaises(lcnc_machine.NotApplicable) as e:
+            lcnc_machine.machine_config([{"id": "nc.trajectory_planner", "value": 209}], runs_planner=209.0)
+        self.assertIn("nc.startup_g64_p_mm: 0", str(e.exception))
+        g64 = [{"id": "nc.trajectory_planner", "value": 209}, {"id": "nc.startup_g64_p_mm", "value": 0}]
+        lcnc_machine.machine_config(g64, runs_planner=209.0)
+        # under the exact stop the adapter runs by default, the tolerance plays no part
+        lcnc_machine.machine_config(g64[:1], "G61.1", runs_planner=209.0)
+        with self.assertRaises(lcnc_machine.NotApplicable) as e:
+            lcnc_machine.machine_config(g64, "G64 P0.005", runs_planner=209.0)
+        self.assertIn("nc.startup_g64_p_mm: 0.005", str(e.exception))
 
     def test_what_linuxcnc_cannot_have_is_not_applicable(self):
         for params, says in [

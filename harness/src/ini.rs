@@ -11,6 +11,8 @@
 //! - the cutting feed: the smallest axis velocity, capped by `[TRAJ] MAX_LINEAR_VELOCITY`, →
 //!   `nc.feed_max_mm_min`, over the smallest acceleration (capped by `MAX_LINEAR_ACCELERATION`) →
 //!   `nc.feed_ramp_ms` (whole milliseconds, rounded);
+//! - `[RS274NGC] RS274NGC_STARTUP_CODE`: its last path mode, when G64, → `nc.startup_g64_p_mm`
+//!   (its P, 0 without one; DEC-169);
 //! - `[SPINDLE_0] MAX_FORWARD_VELOCITY` (rpm) → `nc.spindle_max_rpm`;
 //! - `[DISPLAY] MAX_FEED_OVERRIDE`, `MIN_/MAX_SPINDLE_OVERRIDE` (factors) → the override
 //!   percentages (DEC-112).
@@ -126,6 +128,54 @@ fn round(x: f64, places: i32) -> f64 {
     (x * f).round() / f
 }
 
+/// The power-on path mode a startup code leaves: its last G64 (Some(Some(P)), P 0 when it has
+/// none; in mm when the code's G20/G21 before it says its unit, else in the machine's units
+/// `scale` converts), G61 or G61.1 (Some(None)), or no path mode (None). Words as the interpreter
+/// reads them: case and spaces do not matter, a comment in parentheses is skipped.
+fn startup_g64(code: &str, scale: f64) -> Option<Option<f64>> {
+    let mut text = String::new();
+    let mut depth = 0;
+    for c in code.chars() {
+        match c {
+            '(' => depth += 1,
+            ')' if depth > 0 => depth -= 1,
+            c if depth == 0 && !c.is_whitespace() => text.push(c.to_ascii_uppercase()),
+            _ => {}
+        }
+    }
+    let mut words: Vec<(char, &str)> = Vec::new();
+    let mut rest = text.as_str();
+    while let Some(letter) = rest.chars().next() {
+        let tail = &rest[letter.len_utf8()..];
+        let end = tail
+            .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == '+'))
+            .unwrap_or(tail.len());
+        words.push((letter, &tail[..end]));
+        rest = &tail[end..];
+    }
+    let mut mode = None;
+    let mut in_g64 = false;
+    let mut unit = scale;
+    for (letter, num) in words {
+        match (letter, num.parse::<f64>().ok()) {
+            ('G', Some(g)) if (g - 20.0).abs() < 1e-9 => unit = 25.4,
+            ('G', Some(g)) if (g - 21.0).abs() < 1e-9 => unit = 1.0,
+            ('G', Some(g)) if (g - 64.0).abs() < 1e-9 => {
+                mode = Some(Some(0.0));
+                in_g64 = true;
+            }
+            ('G', Some(g)) if (g - 61.0).abs() < 1e-9 || (g - 61.1).abs() < 1e-9 => {
+                mode = Some(None);
+                in_g64 = false;
+            }
+            ('G', _) => in_g64 = false,
+            ('P', Some(p)) if in_g64 && p >= 0.0 => mode = Some(Some(p * unit)),
+            _ => {}
+        }
+    }
+    mode
+}
+
 /// Maps an INI file onto the `linuxcnc` dialect's parameters.
 pub fn map(ini: &Ini) -> Mapping {
     let mut m = Mapping::default();
@@ -153,6 +203,21 @@ pub fn map(ini: &Ini) -> Mapping {
             notes.push(format!(
                 "[EMCMOT] SERVO_PERIOD = {ns} ns (line {line}): the model's periods are 1, 2, 4 or 8 ms"
             ));
+        }
+    }
+    if let Some((code, line)) = ini.get("RS274NGC", "RS274NGC_STARTUP_CODE") {
+        match startup_g64(code, scale) {
+            Some(Some(p)) => out.push(Mapped {
+                id: "nc.startup_g64_p_mm",
+                axis: None,
+                value: round(p, 6),
+                source: format!("[RS274NGC] RS274NGC_STARTUP_CODE = {code} (line {line})"),
+            }),
+            Some(None) => notes.push(format!(
+                "[RS274NGC] RS274NGC_STARTUP_CODE = {code} (line {line}): powers on in G61 or G61.1; \
+                 the reference powers on in G64 (give the mode in the program)"
+            )),
+            None => {}
         }
     }
     let coords: Vec<char> = ini

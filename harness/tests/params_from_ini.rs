@@ -130,3 +130,37 @@ fn a_fractional_cutting_time_constant_is_rounded_not_dropped() {
     assert!(yaml.contains("(110.667 ms rounded)"), "{yaml}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// DEC-169: the startup code's path mode. LinuxCNC's sample configurations write `G64 P0.005`
+/// (or no path mode: LinuxCNC's own power-on); the P is in the code's unit (G20/G21) or the
+/// machine's; the last path mode wins; G61.1 is named as not mapped.
+#[test]
+fn the_startup_code_s_g64_p_is_the_power_on_tolerance() {
+    let dir = std::env::temp_dir();
+    for (n, (units, code, want)) in [
+        ("mm", "G17 G21 G40 G43H0 G54 G64P0.005 G80 G90 G94 G97 M5 M9", Some(0.005)),
+        ("inch", "G20 G64 P0.001 (blend)", Some(0.0254)),
+        ("inch", "G64 P0.002", Some(0.0508)),
+        ("mm", "G21 G64 G61.1 G64 (last: no P)", Some(0.0)),
+        ("mm", "G21 G64 P0.1 G61.1", None),
+        ("mm", "G21 G90", None),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let ini = dir.join(format!("startup-{}-{n}.ini", std::process::id()));
+        let text = format!(
+            "[TRAJ]\nCOORDINATES = X Y Z\nLINEAR_UNITS = {units}\n[RS274NGC]\nRS274NGC_STARTUP_CODE = {code}\n"
+        );
+        std::fs::write(&ini, text).unwrap();
+        let (status, yaml, err) = from_ini(&ini);
+        let _ = std::fs::remove_file(&ini);
+        assert_eq!(status, 0, "{err}");
+        let m = machine_with(&yaml);
+        let got = m.params.get("nc.startup_g64_p_mm");
+        assert!((got - want.unwrap_or(-1.0)).abs() < 1e-9, "{code}: {got}\n{yaml}");
+        if code.ends_with("G61.1") {
+            assert!(yaml.contains("powers on in G61 or G61.1"), "{yaml}");
+        }
+    }
+}

@@ -128,6 +128,10 @@ pub struct Cfg {
     /// G84/G74 in G18 and G19 feed to LinuxCNC's permuted point (`nc.g74_g84_plane_points` 1,
     /// DEC-166); 0: along the plane's tool axis at the hole, as its manual says.
     pub(super) tap_permuted: bool,
+    /// The startup code's G64 P (nm; `nc.startup_g64_p_mm`, DEC-169): the blend tolerance of
+    /// canon and of the planner at power-on; None: no G64 there (canon 0.001 inch, the planner
+    /// none).
+    startup_p: Option<Nm>,
 }
 
 impl Cfg {
@@ -138,6 +142,9 @@ impl Cfg {
             overshoot_pitches: p.get("nc.rigid_overshoot_pitches"),
             tp_2_9: p.get("nc.trajectory_planner") < 209.5,
             tap_permuted: p.get("nc.g74_g84_plane_points") > 0.5,
+            startup_p: Some(p.get("nc.startup_g64_p_mm"))
+                .filter(|v| *v >= 0.0)
+                .map(|v| (v * 1e6).round() as Nm),
         }
     }
 }
@@ -205,16 +212,19 @@ pub fn alarm(kind: AlarmKind, text: impl Into<String>, line: u32, col: Option<u3
 impl Machine {
     /// Power-on state: G17 G21 G90 G94 G99 G8, spindle stopped.
     pub fn new(p: &Params) -> Self {
+        let cfg = Cfg::from(p);
         Machine {
-            cfg: Cfg::from(p),
+            cfg,
             pos: [0; 6],
             astray: false,
             off: [0; 3],
             inch: false,
             absolute: true,
             continuous: true,
-            tolerance: 0,
-            canon_tolerance: 25_400,
+            // LinuxCNC's power-on (emccanon.cc INIT_CANON: 0.001 inch in canon, none sent to
+            // the planner) unless the startup code gives G64 P (both then).
+            tolerance: cfg.startup_p.unwrap_or(0),
+            canon_tolerance: cfg.startup_p.unwrap_or(25_400),
             arc_absolute: false,
             diameter: false,
             plane: Plane::Xy,
