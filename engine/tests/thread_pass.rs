@@ -343,6 +343,28 @@ fn linuxcnc_g76_with_an_entry_taper_feeds_in_synchronised_and_keeps_one_groove()
     }
 }
 
+/// DEC-170: LinuxCNC's second G33 straight after a first goes on with the synchronisation (tp.c
+/// waits for the index only "if we aren't already synced"): Z stands at the first's end for at
+/// most two servo periods (exact stop), whatever the spindle's angle there; a new index would
+/// cost up to a turn (100 ms at 600 rpm). Recorded on 2.9: `debian-2.9-fresh/g33_g91_chain`
+/// and `_g61_1`.
+#[test]
+fn linuxcnc_a_g33_after_a_g33_takes_no_new_index() {
+    for s in [577, 600, 613, 641] {
+        let prog =
+            format!("G18 G21 G61.1 M3 S{s}\nG4 P0.5\nG0 X10 Z5\nG33 Z-5 K1.5\nG33 X11 Z-10 K1.5\nM2\n");
+        let t = run("linuxcnc", &[], &prog, &sampled(InputSchedule::default()));
+        assert_eq!(t.alarms().count(), 0, "{}", support::events(&t));
+        let at_joint: Vec<u64> = t
+            .samples()
+            .filter(|(_, x)| (x.axes[2] - (-5 * MM as i64)).abs() < 1_000 && x.axes[0] < 10_001_000)
+            .map(|(tu, _)| tu)
+            .collect();
+        let still = at_joint.last().unwrap() - at_joint.first().unwrap();
+        assert!(still <= 2_000, "S{s}: Z stood {still} µs at the joint");
+    }
+}
+
 /// FNV-1a over the trace: every event, samples with all axes, speed and angle.
 fn digest(events: &[nc_engine::trace::TraceEvent]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;

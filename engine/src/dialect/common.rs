@@ -45,6 +45,7 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         spindle_override_at_once: false,
         step_stops_before_motion: false,
         index_latency_periods: 0,
+        sync_run_continues: false,
         parabolic_half_accel: false,
         plc: PlcConfig {
             fin_us: ms("plc.fin_ms"),

@@ -86,6 +86,7 @@ impl Dialect for Linuxcnc {
         // another line, and only the commands of moves carry a line (LCNC-INP-01, L-121).
         c.step_stops_before_motion = true;
         c.index_latency_periods = 1;
+        c.sync_run_continues = true;
         c.parabolic_half_accel = p.get("nc.trajectory_planner") < 209.5;
         c
     }

@@ -89,6 +89,11 @@ pub struct PlantConfig {
     /// copies the pin into its status after its planner has run, so the planner sees the index
     /// in the second period after it; tp.c tpCheckAtSpeed, control.c; DEC-157).
     pub index_latency_periods: u32,
+    /// A synchronised move straight after another (nothing between them but bookkeeping) goes on
+    /// with the run's synchronisation instead of waiting for a new index (LinuxCNC: tp.c
+    /// `tpActivateSegment` waits for the index only "if we aren't already synced"; two G33 in a
+    /// row, DEC-170).
+    pub sync_run_continues: bool,
     /// LinuxCNC 2.9's trajectory planner (`nc.trajectory_planner` 209, DEC-163): under G64
     /// (`Step::PathMode`), a rapid, line or arc after which no move enters the planner's queue
     /// (the next command waits for the motion to end: a rigid tap, a spindle or coolant command,

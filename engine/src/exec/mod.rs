@@ -151,6 +151,9 @@ pub(crate) struct Exec<'a> {
     follow_step: Option<(Micros, crate::plan::Follow)>,
     /// The law the last accelerated thread pass settled on (DEC-147's tracking segments).
     sync_lock: Option<thread::SyncLock>,
+    /// The last step that moved was a synchronised move, with nothing but bookkeeping since
+    /// (`PlantConfig::sync_run_continues`).
+    sync_run: bool,
     /// A braking coast cut short at the allowance (NC-1050): when it ends (µs), the spindle's
     /// speed then (signed rpm) and its braking deceleration (rpm/µs).
     coast: Option<(Micros, f64, f64)>,
@@ -259,6 +262,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         following: false,
         follow_step: None,
         sync_lock: None,
+        sync_run: false,
         coast: None,
         follow_v: None,
         atspeed_next_feed: false,

@@ -35,6 +35,7 @@ const LOOK_AHEAD_BLOCKS: usize = 16;
 pub(super) const MIN_ARC_SPEED: f64 = 1.0;
 
 /// What a step is to LinuxCNC's planner queue.
+#[derive(PartialEq)]
 enum Queue {
     /// Enters it as a move that the present move's end condition is decided against.
     Move,
@@ -42,6 +43,12 @@ enum Queue {
     Buster,
     /// Neither (modal bookkeeping, a phase, the at-speed wait of the next move).
     Quiet,
+}
+
+/// Whether a step is bookkeeping only: it neither moves nor waits for the motion (a phase, a
+/// modal setting, the at-speed wait of the next move).
+pub(super) fn is_bookkeeping(s: &Step) -> bool {
+    queue_of(s) == Queue::Quiet
 }
 
 fn queue_of(s: &Step) -> Queue {

@@ -4,7 +4,7 @@ use super::motion::{Motion, Path};
 use super::profile::Profile;
 use super::{Active, AfterAwait, Exec};
 use crate::alarm::{Alarm, AlarmKind};
-use crate::plan::{Feed, Plane, Pos, SpindleEffect, Step, TapMove};
+use crate::plan::{Feed, PassLaw, Plane, Pos, SpindleEffect, Step, TapMove, ThreadPass};
 use crate::trace::{EndReason, Event, Signal, AXES};
 use crate::units::{ceil_to, Micros};
 
@@ -148,6 +148,23 @@ impl Exec<'_> {
             self.steps.push_front(step);
             self.steps.push_front(Step::AwaitAtSpeed);
             return;
+        }
+        // LinuxCNC: a synchronised move straight after another goes on with the run (DEC-170).
+        let step = match step {
+            Step::Thread(p)
+                if self.cfg.sync_run_continues
+                    && self.sync_run
+                    && self.sync_lock.is_some()
+                    && p.law == PassLaw::Accelerated { room: None } =>
+            {
+                Step::Thread(ThreadPass { law: PassLaw::Tracking, ..p })
+            }
+            other => other,
+        };
+        // The run ends at any other step that moves or waits; a synchronised move's own start
+        // (`start_motion`) begins or continues it.
+        if !super::planner::is_bookkeeping(&step) && !matches!(step, Step::Thread(_)) {
+            self.sync_run = false;
         }
         match step {
             Step::Phase(p) => self.set_phase(p),
@@ -526,6 +543,7 @@ impl Exec<'_> {
     }
 
     pub(super) fn start_motion(&mut self, target: Pos, path: Path) {
+        self.sync_run = matches!(path, Path::Thread { .. });
         let m = Motion {
             t0: self.now,
             start: self.cmd,
