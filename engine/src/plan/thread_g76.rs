@@ -71,7 +71,12 @@ pub fn thread_g76(c: &ThreadG76, out: &mut Vec<Step>) {
     }
     let mut end = c.start;
     end[c.z_axis] = c.z_end;
-    out.push(Step::Rapid { target: end });
+    // The last pass's rapid out already ends there (at full depth it ends at the start's X and
+    // Z's end): LinuxCNC's planner drops the cycle's final traverse of no length (DEC-167), so
+    // the move after the cycle joins the rapid out.
+    if !matches!(out.last(), Some(Step::Rapid { target }) if *target == end) {
+        out.push(Step::Rapid { target: end });
+    }
     out.push(Step::Phase(Phase::Idle));
 }
 
