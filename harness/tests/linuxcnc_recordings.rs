@@ -7,6 +7,7 @@
 
 use std::path::PathBuf;
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 const BIN: &str = env!("CARGO_BIN_EXE_nc-conform");
 
@@ -26,7 +27,7 @@ const EXPECTED_DIVERGENT: [(&str, &str); 1] = [(
 
 /// The machine each set of recordings was made on: Debian's LinuxCNC 2.9 (its planner,
 /// `nc.trajectory_planner` 209, DEC-163) or the source build after 2.9 (the default planner).
-fn params_of(set: &str) -> &'static str {
+fn machine_of(set: &str) -> &'static str {
     if set.starts_with("debian-2.9") {
         "linuxcnc-sim-2.9.params.yaml"
     } else {
@@ -45,27 +46,22 @@ fn params_of(set: &str) -> &'static str {
 #[test]
 fn g84_in_g18_feeds_to_linuxcnc_s_permuted_points() {
     let params = "linuxcnc-sim-2.9.params.yaml";
-    let manual = std::env::temp_dir().join(format!("lcnc-g84-manual-{}.yaml", std::process::id()));
-    let base = std::fs::read_to_string(data().join(params)).unwrap();
-    std::fs::write(&manual, format!("{base}  nc.g74_g84_plane_points: 0\n")).unwrap();
     for (set, name) in [("debian-2.9", "g84_g18"), ("debian-2.9-exact-stop", "g84_g18_g61_1")] {
-        let (program, trace) = (program_of(set, name), format!("recordings/{set}/csv/{name}.csv"));
-        let (code, text) = check_with(&program, params, &trace);
+        let (program, trace) = (format!("programs/{name}.ngc"), format!("recordings/{set}/csv/{name}.csv"));
+        let (code, text) = check_with(&program, params_of(set, name, &[]).path(), &trace);
         assert_eq!(code, 0, "{set}/{name}, LinuxCNC's points:\n{text}");
-        let (code, text) = check_with(&program, manual.to_str().unwrap(), &trace);
+        let manual = params_of(set, name, &["nc.g74_g84_plane_points: 0"]);
+        let (code, text) = check_with(&program, manual.path(), &trace);
         assert_eq!(code, 1, "{set}/{name}, the manual's tool axis:\n{text}");
     }
-    let _ = std::fs::remove_file(&manual);
     let trace = "recordings/debian-2.9/csv/g84_g18.csv";
     let (code, text) = check_with("as-run/g84_g18_rs274.ngc", params, trace);
     assert_eq!(code, 0, "{text}");
     let program = std::fs::read_to_string(data().join("as-run/g84_g18_rs274.ngc")).unwrap();
     let loose = program.replace(" P0.0254", "");
     assert_ne!(program, loose, "the file gives the session's tolerance");
-    let path = std::env::temp_dir().join(format!("lcnc-g84-g18-{}.ngc", std::process::id()));
-    std::fs::write(&path, loose).unwrap();
-    let (code, text) = check_with(path.to_str().unwrap(), params, trace);
-    let _ = std::fs::remove_file(&path);
+    let path = TempFile::with("g84-g18-loose.ngc", &loose);
+    let (code, text) = check_with(path.path(), params, trace);
     assert_eq!(code, 1, "{text}");
 }
 
@@ -125,14 +121,25 @@ fn g64_corners_and_their_tolerances_are_2_9_s() {
 /// apart, and its default is LinuxCNC's own power-on.
 #[test]
 fn the_power_on_tolerance_is_linuxcnc_s_own_unless_the_startup_code_gives_g64() {
-    let base = std::fs::read_to_string(data().join("linuxcnc-sim-2.9.params.yaml")).unwrap();
-    let params = std::env::temp_dir().join(format!("lcnc-startup-{}.yaml", std::process::id()));
-    std::fs::write(&params, format!("{base}  nc.startup_g64_p_mm: 0\n")).unwrap();
     let (program, trace) = ("programs/g64_tolerance.ngc", "recordings/debian-2.9-g64/csv/g64_tolerance.csv");
     let (code, text) = check_with(program, "linuxcnc-sim-2.9.params.yaml", trace);
     assert_eq!(code, 0, "{text}");
-    let (code, text) = check_with(program, params.to_str().unwrap(), trace);
-    let _ = std::fs::remove_file(&params);
+    let g64 = params_of("debian-2.9-g64", "g64_tolerance", &["nc.startup_g64_p_mm: 0"]);
+    let (code, text) = check_with(program, g64.path(), trace);
+    assert_eq!(code, 1, "{text}");
+}
+
+/// DEC-169 with a tolerance: `debian-2.9/g84_g18` was recorded after g81 and g84 in one session,
+/// whose canned cycles left 0.001 inch in canon and in the planner, the state a startup code
+/// `G64 P0.0254` gives (`SESSION_STATE`): conformant so; from LinuxCNC's own power-on (the
+/// planner with no tolerance: the G0 onto the hole and the rapid down to R joined on a wide
+/// arc) it is not.
+#[test]
+fn a_session_s_leftover_tolerance_is_the_startup_g64_p() {
+    let (program, trace) = ("programs/g84_g18.ngc", "recordings/debian-2.9/csv/g84_g18.csv");
+    let (code, text) = check_with(program, params_of("debian-2.9", "g84_g18", &[]).path(), trace);
+    assert_eq!(code, 0, "{text}");
+    let (code, text) = check_with(program, "linuxcnc-sim-2.9.params.yaml", trace);
     assert_eq!(code, 1, "{text}");
 }
 
@@ -154,31 +161,53 @@ fn g64_tangent_joins_run_on_as_2_9_s_do() {
     assert!(rms < 0.02, "fit rms {rms} mm\n{text}");
 }
 
-/// What a recording's LinuxCNC session held before its program ran, given to the reference as
-/// a first line: the recordings of one set were made in one session, one program after another
-/// (`scripts/linuxcnc-record --one-session`), and state the interpreter keeps between programs
-/// shows. `debian-2.9/g84_g18` ran after g81 and g84, whose canned cycles left canon's
+/// What a recording's LinuxCNC session held before its program ran, as the machine parameter
+/// that gives that state: the recordings of one set were made in one session, one program after
+/// another (`scripts/linuxcnc-record --one-session`), and state the interpreter keeps between
+/// programs shows. `debian-2.9/g84_g18` ran after g81 and g84, whose canned cycles left canon's
 /// tolerance, 0.001 inch, in the planner (DEC-164, L-124): its G0 onto the hole and the rapid
-/// down to R turn on that small arc, not on the arc of no tolerance LinuxCNC gives at power-on.
-const SESSION_STATE: [(&str, &str); 1] = [("debian-2.9/g84_g18", "G64 P0.0254")];
+/// down to R turn on that small arc, as after a startup code `G64 P0.0254` (DEC-169), not on the
+/// arc of no tolerance LinuxCNC gives at power-on.
+const SESSION_STATE: [(&str, &str); 1] = [("debian-2.9/g84_g18", "nc.startup_g64_p_mm: 0.0254")];
 
-/// The program of recording `set/name`, with the session's state first (a file in the temp
-/// directory) where [`SESSION_STATE`] lists one.
-fn program_of(set: &str, name: &str) -> String {
-    let key = format!("{set}/{name}");
-    match SESSION_STATE.iter().find(|(k, _)| *k == key) {
-        Some((_, state)) => {
-            let text = std::fs::read_to_string(data().join(format!("programs/{name}.ngc"))).unwrap();
-            let path = std::env::temp_dir().join(format!("lcnc-session-{}-{name}.ngc", std::process::id()));
-            std::fs::write(&path, format!("{state}\n{text}")).unwrap();
-            path.to_string_lossy().into_owned()
-        }
-        None => format!("programs/{name}.ngc"),
+/// A file in the temp directory, removed when dropped.
+struct TempFile(PathBuf);
+
+impl TempFile {
+    /// Each file its own name: tests run in parallel, and two may ask for the same recording.
+    fn with(name: &str, text: &str) -> TempFile {
+        static SERIAL: AtomicUsize = AtomicUsize::new(0);
+        let n = SERIAL.fetch_add(1, Ordering::Relaxed);
+        let path = std::env::temp_dir().join(format!("lcnc-{}-{n}-{name}", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        TempFile(path)
+    }
+    fn path(&self) -> &str {
+        self.0.to_str().unwrap()
     }
 }
 
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// The parameters of recording `set/name`: its set's machine, its session's state
+/// ([`SESSION_STATE`]) and `extra` lines (each `id: value`) on top.
+fn params_of(set: &str, name: &str, extra: &[&str]) -> TempFile {
+    let key = format!("{set}/{name}");
+    let mut text = std::fs::read_to_string(data().join(machine_of(set))).unwrap();
+    let state = SESSION_STATE.iter().filter(|(k, _)| *k == key).map(|(_, v)| *v);
+    for line in state.chain(extra.iter().copied()) {
+        text.push_str(&format!("  {line}\n"));
+    }
+    TempFile::with(&format!("{}-{name}.yaml", set.replace('/', "-")), &text)
+}
+
 fn check(set: &str, name: &str) -> (i32, String) {
-    check_with(&program_of(set, name), params_of(set), &format!("recordings/{set}/csv/{name}.csv"))
+    let params = params_of(set, name, &[]);
+    check_with(&format!("programs/{name}.ngc"), params.path(), &format!("recordings/{set}/csv/{name}.csv"))
 }
 
 fn check_with(program: &str, params: &str, trace: &str) -> (i32, String) {
@@ -230,21 +259,12 @@ fn every_recording_of_linuxcnc_is_conformant_or_listed_with_its_reason() {
 /// rapids at a third of the rate: the test can fail.
 #[test]
 fn a_wrong_machine_is_caught() {
-    let d = data();
-    let params = std::env::temp_dir().join(format!("lcnc-slow-{}.yaml", std::process::id()));
-    let base = std::fs::read_to_string(d.join("linuxcnc-sim.params.yaml")).unwrap();
+    let base = std::fs::read_to_string(data().join("linuxcnc-sim.params.yaml")).unwrap();
     let slow = base.replace("1828.8", "609.6");
     assert_ne!(base, slow, "the params file names the rapid rate 1828.8");
-    std::fs::write(&params, slow).unwrap();
-    let out = Command::new(BIN)
-        .current_dir(&d)
-        .args(["check", "programs/g81.ngc", "--dialect", "linuxcnc", "--map", "linuxcnc-map.yaml"])
-        .args(["--params", params.to_str().unwrap(), "--trace", "recordings/source-2.10/csv/g81.csv"])
-        .args(["--tolerances", "user-tolerances.yaml"])
-        .output()
-        .unwrap();
-    let _ = std::fs::remove_file(&params);
-    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stdout));
+    let params = TempFile::with("slow.yaml", &slow);
+    let (code, text) = check_with("programs/g81.ngc", params.path(), "recordings/source-2.10/csv/g81.csv");
+    assert_eq!(code, 1, "{text}");
 }
 
 /// LinuxCNC 2.9 through `examples/linuxcnc-adapter` (exact stop, `scenarios/linuxcnc/g76/passes`,

@@ -47,6 +47,7 @@ pub fn plant_config(p: &Params, rapid: &str, rapid_ramp: &str, backlash: &str) -
         index_latency_periods: 0,
         sync_run_continues: false,
         parabolic_half_accel: false,
+        power_on_tolerance_nm: 0.0,
         plc: PlcConfig {
             fin_us: ms("plc.fin_ms"),
             fin_fall_us: ms("plc.fin_fall_ms"),

@@ -88,6 +88,7 @@ impl Dialect for Linuxcnc {
         c.index_latency_periods = 1;
         c.sync_run_continues = true;
         c.parabolic_half_accel = p.get("nc.trajectory_planner") < 209.5;
+        c.power_on_tolerance_nm = (p.get("nc.startup_g64_p_mm") * 1e6).round().max(0.0);
         c
     }
     fn interpreter(&self, params: &Params) -> Box<dyn Interpreter> {

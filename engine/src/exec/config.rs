@@ -101,6 +101,9 @@ pub struct PlantConfig {
     /// acceleration for its whole length (tc.c `tcGetOverallMaxAccel`). False: every move at its
     /// full acceleration (LinuxCNC 2.10, and any move that stops exactly).
     pub parabolic_half_accel: bool,
+    /// The blend tolerance the planner powers on with, nm (0: none; `Step::PathMode` changes
+    /// it): LinuxCNC's startup code's G64 P (`nc.startup_g64_p_mm`, DEC-169).
+    pub power_on_tolerance_nm: f64,
     /// The PLC ladder.
     pub plc: PlcConfig,
     /// The override switches' ranges and steps.

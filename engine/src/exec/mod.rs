@@ -180,6 +180,7 @@ pub(crate) struct Exec<'a> {
 /// Runs `program` on `machine`, streaming the trace into `sink`.
 pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut dyn TraceSink) {
     let cfg = machine.dialect.plant_config(&machine.params);
+    let power_on_tolerance = cfg.power_on_tolerance_nm;
     let meta = TraceMeta {
         dialect: machine.dialect.name(),
         axes: machine.dialect.axes().to_vec(),
@@ -267,7 +268,7 @@ pub fn run(machine: &Machine, program: &Program, opts: &RunOptions, sink: &mut d
         follow_v: None,
         atspeed_next_feed: false,
         path_continuous: true,
-        path_tolerance: 0.0,
+        path_tolerance: power_on_tolerance,
         ahead: planner::Ahead::new(),
         blend: None,
         entry: None,
