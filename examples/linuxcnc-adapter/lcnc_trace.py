@@ -630,9 +630,6 @@ class Trace:
         moving = any(abs(r[a] - p[a]) > 1e-9 for a in "XYZ")
         mtype = int(r["mtype"])
         ph = self.phase
-        if kind in ("cycle74", "cycle84") and plane != 17:
-            self.permuted_tap_phases(r, t, ph, moving, mtype)
-            return
         if kind == "g33":
             # as the reference: a G33 line is its cutting phase from its start (the index wait
             # included) to the next line
@@ -669,6 +666,18 @@ class Trace:
                 self.set_phase(t, "retract")
             self.hold_still = True
             return
+        if kind in ("cycle74", "cycle84") and plane != 17:
+            # G84/G74 in G18/G19: LinuxCNC feeds in and out to its permuted points (DEC-166),
+            # which need not move along the plane's tool axis, nor down it: the feed in is the
+            # cutting (from its first period), a traverse after the feed out the next hole's
+            # positioning, as the reference marks them; the bottom as any cycle's
+            if ph == "positioning" and moving and mtype == MOTION_FEED:
+                self.set_phase(t, "cutting")
+            elif ph == "retract" and moving and mtype != MOTION_FEED:
+                self.set_phase(t, "positioning")
+            elif ph in ("cutting", "dwell"):
+                self.bottom(t, r, ph, moving, dwell_p, kind)
+            return
         if ph in ("positioning", "retract") and moving and mtype == MOTION_FEED and d < 0:
             self.set_phase(t, "cutting")
         elif ph == "retract" and moving and abs(d) < 1e-9 and kind.startswith("cycle"):
@@ -678,35 +687,16 @@ class Trace:
             # a peck cycle's way back down (G83: the rapid to just above the last depth) is part
             # of the next peck, as the reference marks it
             self.set_phase(t, "cutting")
-        elif ph == "cutting":
-            if moving and d > 0:
-                self.set_phase(t, "retract")
-            elif not moving:
-                if dwell_p > 0 and kind in ("cycle74", "cycle82", "cycle84", "cycle86", "cycle88", "cycle89"):
-                    self.set_phase(t, "dwell")
-                    self.still_since = r["cycle"]
-                else:
-                    self.set_phase(t, "retract")
-        elif ph == "dwell":
-            if moving or r["cycle"] - self.still_since >= int(round(dwell_p * 1e6 / self.P)):
-                self.set_phase(t, "retract")
+        elif ph == "cutting" and moving and d > 0:
+            self.set_phase(t, "retract")
+        elif ph in ("cutting", "dwell"):
+            self.bottom(t, r, ph, moving, dwell_p, kind)
 
-    def permuted_tap_phases(self, r, t, ph, moving, mtype):
-        """G84/G74 in G18/G19: LinuxCNC feeds in and out to its permuted points (DEC-166), which
-        need not move along the plane's tool axis, nor down it: the feed in is the cutting (from
-        its first period), its standstill at the bottom the dwell (P) or the retract, the feed
-        out the retract, a traverse after it the next hole's positioning, as the reference
-        marks them."""
-        dwell_p = self.prog.p.get(self.cur, 0.0)
-        if moving:
-            self.hold_still = False
-        elif getattr(self, "pause_pending", False) or self.levels["SPL"] or getattr(self, "hold_still", False):
-            self.hold_still = True
-            return
-        if ph == "positioning" and moving and mtype == MOTION_FEED:
-            self.set_phase(t, "cutting")
-        elif ph == "cutting" and not moving:
-            if dwell_p > 0:
+    def bottom(self, t, r, ph, moving, dwell_p, kind):
+        """A cycle's bottom: the cut's standstill is its dwell (P, in the cycles that dwell) or
+        its retract; the dwell ends when the motion goes on or its time is up."""
+        if ph == "cutting" and not moving:
+            if dwell_p > 0 and kind in ("cycle74", "cycle82", "cycle84", "cycle86", "cycle88", "cycle89"):
                 self.set_phase(t, "dwell")
                 self.still_since = r["cycle"]
             else:
@@ -714,8 +704,6 @@ class Trace:
         elif ph == "dwell":
             if moving or r["cycle"] - self.still_since >= int(round(dwell_p * 1e6 / self.P)):
                 self.set_phase(t, "retract")
-        elif ph == "retract" and moving and mtype != MOTION_FEED:
-            self.set_phase(t, "positioning")
 
     def finish_program(self, end_c, reason):
         """At the end: the cycle left, the program end's block and M2/M30 when LinuxCNC reached it."""

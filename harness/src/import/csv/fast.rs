@@ -44,6 +44,17 @@ impl Dec {
     }
 }
 
+/// The run of ASCII digits at `line[i..]` appended to `mant` (wrapping: the caller bounds the
+/// count), and where the run ends.
+#[inline]
+fn digits_at(line: &[u8], mut i: usize, mut mant: u64) -> (u64, usize) {
+    while let Some(d) = line.get(i).map(|b| b.wrapping_sub(b'0')).filter(|d| *d <= 9) {
+        mant = mant.wrapping_mul(10).wrapping_add(u64::from(d));
+        i += 1;
+    }
+    (mant, i)
+}
+
 /// Reads the plain decimal at `line[i..]` up to `delim` or the line's end: the decimal and where
 /// it ends (at the delimiter or the end); `None` when the field is not a plain decimal.
 #[inline]
@@ -51,33 +62,17 @@ pub(crate) fn scan_dec(line: &[u8], mut i: usize, delim: u8) -> Option<(Dec, usi
     let n = line.len();
     let neg = i < n && line[i] == b'-';
     i += usize::from(neg);
-    let start = i;
-    let mut mant: u64 = 0;
-    while i < n {
-        let d = line[i].wrapping_sub(b'0');
-        if d > 9 {
-            break;
-        }
-        mant = mant.wrapping_mul(10).wrapping_add(u64::from(d));
-        i += 1;
-    }
-    let mut digits = i - start;
-    let dot = i < n && line[i] == b'.';
+    let (mut mant, mut end) = digits_at(line, i, 0);
+    let mut digits = end - i;
+    let dot = end < n && line[end] == b'.';
     let mut frac = 0;
     if dot {
-        i += 1;
-        let start = i;
-        while i < n {
-            let d = line[i].wrapping_sub(b'0');
-            if d > 9 {
-                break;
-            }
-            mant = mant.wrapping_mul(10).wrapping_add(u64::from(d));
-            i += 1;
-        }
-        frac = i - start;
+        let start = end + 1;
+        (mant, end) = digits_at(line, start, mant);
+        frac = end - start;
         digits += frac;
     }
+    let i = end;
     // At most 19 digits: no wrap above (10^19 − 1 < 2^64).
     if digits == 0 || digits > 19 || (i < n && line[i] != delim) {
         return None;
